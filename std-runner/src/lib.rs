@@ -1,0 +1,1 @@
+//! hirad runner library.
