@@ -13,7 +13,9 @@
 #![warn(missing_docs)]
 
 #[cfg(target_endian = "big")]
-compile_error!("hirad-core reads little-endian scene images in place; big-endian hosts are not supported yet");
+compile_error!(
+    "hirad-core reads little-endian scene images in place; big-endian hosts are not supported yet"
+);
 
 pub mod geometry;
 pub mod handles;

@@ -61,15 +61,24 @@ pub enum MaterialError {
 impl core::fmt::Display for MaterialError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
-            MaterialError::NonFinite { band } => write!(f, "band {band}: value is not a finite number"),
-            MaterialError::Reflectance { band } => write!(f, "band {band}: reflectance must lie in 0..=1"),
+            MaterialError::NonFinite { band } => {
+                write!(f, "band {band}: value is not a finite number")
+            }
+            MaterialError::Reflectance { band } => {
+                write!(f, "band {band}: reflectance must lie in 0..=1")
+            }
             MaterialError::Transmittance { band } => {
                 write!(f, "band {band}: transmittance must lie in 0..=1")
             }
             MaterialError::EnergyNotConserved { band } => {
-                write!(f, "band {band}: reflectance + transmittance exceeds 1 (energy would be created)")
+                write!(
+                    f,
+                    "band {band}: reflectance + transmittance exceeds 1 (energy would be created)"
+                )
             }
-            MaterialError::Emission { band } => write!(f, "band {band}: emitted exitance must be >= 0"),
+            MaterialError::Emission { band } => {
+                write!(f, "band {band}: emitted exitance must be >= 0")
+            }
         }
     }
 }
@@ -100,11 +109,18 @@ impl MaterialData {
     pub fn check(&self) -> Result<(), MaterialError> {
         for b in 0..self.bands as usize {
             let band = b as u8;
-            let vals = [self.rho_front[b], self.emit_front[b], self.rho_back[b], self.tau[b], self.emit_back[b]];
+            let vals = [
+                self.rho_front[b],
+                self.emit_front[b],
+                self.rho_back[b],
+                self.tau[b],
+                self.emit_back[b],
+            ];
             if vals.iter().any(|v| !v.is_finite()) {
                 return Err(MaterialError::NonFinite { band });
             }
-            if !(0.0..=1.0).contains(&self.rho_front[b]) || !(0.0..=1.0).contains(&self.rho_back[b]) {
+            if !(0.0..=1.0).contains(&self.rho_front[b]) || !(0.0..=1.0).contains(&self.rho_back[b])
+            {
                 return Err(MaterialError::Reflectance { band });
             }
             if !(0.0..=1.0).contains(&self.tau[b]) {
@@ -128,8 +144,13 @@ impl MaterialData {
         let n = bands as usize;
         let mut m = MaterialData::black(bands);
         m.two_sided = two_sided;
-        let mut fields: [&mut [f32; MAX_BANDS]; 5] =
-            [&mut m.rho_front, &mut m.emit_front, &mut m.rho_back, &mut m.tau, &mut m.emit_back];
+        let mut fields: [&mut [f32; MAX_BANDS]; 5] = [
+            &mut m.rho_front,
+            &mut m.emit_front,
+            &mut m.rho_back,
+            &mut m.tau,
+            &mut m.emit_back,
+        ];
         let used = if two_sided { 5 } else { 2 };
         for (k, field) in fields.iter_mut().enumerate().take(used) {
             for b in 0..n {
@@ -143,7 +164,13 @@ impl MaterialData {
     /// returning the number of values written, or `None` if `out` is too short.
     pub fn to_values(&self, out: &mut [f32]) -> Option<usize> {
         let n = self.bands as usize;
-        let fields = [&self.rho_front, &self.emit_front, &self.rho_back, &self.tau, &self.emit_back];
+        let fields = [
+            &self.rho_front,
+            &self.emit_front,
+            &self.rho_back,
+            &self.tau,
+            &self.emit_back,
+        ];
         let used = if self.two_sided { 5 } else { 2 };
         let total = used * n;
         let out = out.get_mut(..total)?;
@@ -171,7 +198,10 @@ mod tests {
         assert_eq!(MaterialData::from_values(2, true, &buf[..n]), m);
         assert!(m.check().is_ok());
         m.tau[1] = 0.7;
-        assert_eq!(m.check(), Err(MaterialError::EnergyNotConserved { band: 1 }));
+        assert_eq!(
+            m.check(),
+            Err(MaterialError::EnergyNotConserved { band: 1 })
+        );
         m.tau[1] = f32::NAN;
         assert_eq!(m.check(), Err(MaterialError::NonFinite { band: 1 }));
         m.tau[1] = 0.0;

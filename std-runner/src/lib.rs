@@ -1,1 +1,6 @@
-//! hirad runner library.
+//! hirad runner: the std side of hirad. Scene model, text (`.hir`) and OBJ/MTL formats,
+//! compilation to the core's binary image, and the `hirad` command line.
+
+pub mod obj;
+pub mod scene;
+pub mod text;

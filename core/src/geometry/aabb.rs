@@ -67,6 +67,10 @@ impl Aabb {
 
     /// Length of the diagonal (m); 0 for an empty box.
     pub fn diagonal(&self) -> f32 {
-        if self.is_empty() { 0.0 } else { (self.max - self.min).length() }
+        if self.is_empty() {
+            0.0
+        } else {
+            (self.max - self.min).length()
+        }
     }
 }

@@ -8,5 +8,5 @@ mod transform;
 
 pub use aabb::Aabb;
 pub use camera::camera_ok;
-pub use polygon::{PolygonShape, ShapeError, polygon_shape, DEGENERATE_REL, PLANAR_REL};
+pub use polygon::{DEGENERATE_REL, PLANAR_REL, PolygonShape, ShapeError, polygon_shape};
 pub use transform::{Similarity, TransformError};

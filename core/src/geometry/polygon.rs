@@ -62,7 +62,10 @@ pub fn polygon_shape(corners: &[Vec3]) -> Result<PolygonShape, ShapeError> {
 
 fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Result<PolygonShape, ShapeError> {
     let (e0, e1, e2) = (b - a, c - b, a - c);
-    let longest2 = e0.length_squared().max(e1.length_squared()).max(e2.length_squared());
+    let longest2 = e0
+        .length_squared()
+        .max(e1.length_squared())
+        .max(e2.length_squared());
     let n = e0.cross(c - a);
     shape_from(n, longest2)
 }
@@ -102,7 +105,10 @@ fn shape_from(n: Vec3, longest2: f32) -> Result<PolygonShape, ShapeError> {
     if len <= DEGENERATE_REL * longest2 || len == 0.0 {
         return Err(ShapeError::Degenerate);
     }
-    Ok(PolygonShape { area: 0.5 * len, normal: n / len })
+    Ok(PolygonShape {
+        area: 0.5 * len,
+        normal: n / len,
+    })
 }
 
 #[cfg(test)]
@@ -115,7 +121,8 @@ mod tests {
 
     #[test]
     fn unit_square_and_triangle() {
-        let s = polygon_shape(&[v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)]).unwrap();
+        let s =
+            polygon_shape(&[v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)]).unwrap();
         assert_eq!(s.area, 1.0);
         assert_eq!(s.normal, v(0., 0., 1.));
         let t = polygon_shape(&[v(0., 0., 0.), v(0., 1., 0.), v(1., 0., 0.)]).unwrap();

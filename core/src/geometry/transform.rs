@@ -40,8 +40,11 @@ const UNIT_TOLERANCE: f32 = 1e-5;
 
 impl Similarity {
     /// The identity.
-    pub const IDENTITY: Similarity =
-        Similarity { rotation: Quat::IDENTITY, translation: Vec3::ZERO, scale: 1.0 };
+    pub const IDENTITY: Similarity = Similarity {
+        rotation: Quat::IDENTITY,
+        translation: Vec3::ZERO,
+        scale: 1.0,
+    };
 
     /// Checks a transform read from untrusted input.
     pub fn checked(rotation: Quat, translation: Vec3, scale: f32) -> Result<Self, TransformError> {
@@ -54,7 +57,11 @@ impl Similarity {
         if !(scale > 0.0) || !scale.is_normal() {
             return Err(TransformError::Scale);
         }
-        Ok(Similarity { rotation, translation, scale })
+        Ok(Similarity {
+            rotation,
+            translation,
+            scale,
+        })
     }
 
     /// Maps a point of the local frame into the parent frame.
@@ -100,8 +107,14 @@ mod tests {
             Similarity::checked(Quat::from_xyzw(0., 0., 0., 2.), Vec3::ZERO, 1.0),
             Err(TransformError::RotationNotUnit)
         );
-        assert_eq!(Similarity::checked(Quat::IDENTITY, Vec3::ZERO, 0.0), Err(TransformError::Scale));
-        assert_eq!(Similarity::checked(Quat::IDENTITY, Vec3::ZERO, -1.0), Err(TransformError::Scale));
+        assert_eq!(
+            Similarity::checked(Quat::IDENTITY, Vec3::ZERO, 0.0),
+            Err(TransformError::Scale)
+        );
+        assert_eq!(
+            Similarity::checked(Quat::IDENTITY, Vec3::ZERO, -1.0),
+            Err(TransformError::Scale)
+        );
         assert_eq!(
             Similarity::checked(Quat::IDENTITY, Vec3::new(f32::NAN, 0., 0.), 1.0),
             Err(TransformError::NonFinite)

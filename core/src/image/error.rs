@@ -45,7 +45,11 @@ pub enum ImageErrorKind {
     /// A section holds more records than can be indexed.
     SectionTooLarge { section: Section },
     /// A section is not where the canonical layout puts it.
-    SectionOffset { section: Section, expected: u64, found: u64 },
+    SectionOffset {
+        section: Section,
+        expected: u64,
+        found: u64,
+    },
     /// A padding byte between sections is not zero.
     Padding,
     /// A string lies outside the string bytes or is too long.
@@ -97,7 +101,10 @@ pub enum ImageErrorKind {
     /// An instance inside an original refers to that original or a later one: a cycle.
     OriginalCycle { instance: u32, original: u32 },
     /// An instance's transform is unusable.
-    Transform { instance: u32, error: TransformError },
+    Transform {
+        instance: u32,
+        error: TransformError,
+    },
     /// A node's bounding box is not finite, inverted, or does not contain its content.
     Bbox { node: u32 },
     /// A node's expanded polygon count is wrong.
@@ -114,7 +121,11 @@ pub enum ImageErrorKind {
     /// at the last node.
     SceneRoot,
     /// Records left over that no node owns.
-    Unowned { section: Section, used: u64, count: u64 },
+    Unowned {
+        section: Section,
+        used: u64,
+        count: u64,
+    },
     /// A light's direction is not a unit vector.
     LightDirection { light: u32 },
     /// A light's values lie outside the pool or are negative.

@@ -27,10 +27,18 @@ impl ImageLayout {
             let count = counts[s as usize];
             let size = s.record_size();
             let bytes = count.checked_mul(size as u64)?;
-            sections[s as usize] = SectionEntry { offset: at, count, record_size: size, reserved: 0 };
+            sections[s as usize] = SectionEntry {
+                offset: at,
+                count,
+                record_size: size,
+                reserved: 0,
+            };
             at = at.checked_add(bytes)?.checked_add(7)? & !7;
         }
-        Some(ImageLayout { sections, file_size: at })
+        Some(ImageLayout {
+            sections,
+            file_size: at,
+        })
     }
 
     /// The header for this layout.

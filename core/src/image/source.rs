@@ -44,7 +44,9 @@ impl SceneSource for SliceSource<'_> {
 
     fn read_at(&self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
         let start = usize::try_from(offset).map_err(|_| SourceError::OutOfRange)?;
-        let end = start.checked_add(buf.len()).ok_or(SourceError::OutOfRange)?;
+        let end = start
+            .checked_add(buf.len())
+            .ok_or(SourceError::OutOfRange)?;
         let bytes = self.0.get(start..end).ok_or(SourceError::OutOfRange)?;
         buf.copy_from_slice(bytes);
         Ok(())

@@ -11,10 +11,10 @@ use super::layout::ImageLayout;
 use super::records::*;
 use super::source::SceneSource;
 use super::view::{SceneInfo, SceneView, read_records};
+use crate::NodeId;
 use crate::geometry::{Aabb, Similarity, camera_ok, polygon_shape};
 use crate::limits::{MAX_BANDS, MAX_INSTANCING_DEPTH, MAX_NAME_BYTES, MAX_NODE_DEPTH, NONE};
 use crate::material::{MaterialData, TWO_SIDED};
-use crate::NodeId;
 use bytemuck::Pod;
 use glam::{Quat, Vec3};
 
@@ -29,7 +29,12 @@ struct Window<T: Pod, const N: usize> {
 
 impl<T: Pod, const N: usize> Window<T, N> {
     fn new(section: Section) -> Self {
-        Window { section, first: 0, len: 0, buf: [T::zeroed(); N] }
+        Window {
+            section,
+            first: 0,
+            len: 0,
+            buf: [T::zeroed(); N],
+        }
     }
 
     fn get<S: SceneSource>(&mut self, src: &S, h: &Header, index: u64) -> Result<T, ImageError> {
@@ -38,7 +43,10 @@ impl<T: Pod, const N: usize> Window<T, N> {
             if index >= count {
                 return Err(ImageError::at(
                     offset_of(h, self.section, index),
-                    K::OutOfRange { section: self.section, index },
+                    K::OutOfRange {
+                        section: self.section,
+                        index,
+                    },
                 ));
             }
             let len = (count - index).min(N as u64) as usize;
@@ -52,7 +60,8 @@ impl<T: Pod, const N: usize> Window<T, N> {
 
 fn offset_of(h: &Header, s: Section, index: u64) -> u64 {
     let e = h.section(s);
-    e.offset.saturating_add(index.saturating_mul(e.record_size as u64))
+    e.offset
+        .saturating_add(index.saturating_mul(e.record_size as u64))
 }
 
 fn err<T>(h: &Header, s: Section, index: u64, kind: K) -> Result<T, ImageError> {
@@ -97,22 +106,32 @@ fn read_header<S: SceneSource>(src: &S) -> Result<Header, ImageError> {
         // A short file may still be recognisably not ours.
         let mut m = [0u8; 8];
         let n = (len as usize).min(8);
-        src.read_at(0, &mut m[..n]).map_err(|e| ImageError::at(0, K::Source(e)))?;
+        src.read_at(0, &mut m[..n])
+            .map_err(|e| ImageError::at(0, K::Source(e)))?;
         if m[..n] != MAGIC[..n] {
             return Err(ImageError::at(0, K::BadMagic));
         }
         return Err(ImageError::at(len, K::TooShort { len }));
     }
     let mut h: Header = bytemuck::Zeroable::zeroed();
-    src.read_at(0, bytemuck::bytes_of_mut(&mut h)).map_err(|e| ImageError::at(0, K::Source(e)))?;
+    src.read_at(0, bytemuck::bytes_of_mut(&mut h))
+        .map_err(|e| ImageError::at(0, K::Source(e)))?;
     if h.magic != MAGIC {
         return Err(ImageError::at(0, K::BadMagic));
     }
     if h.version != FORMAT_VERSION {
-        return Err(ImageError::at(8, K::UnsupportedVersion { found: h.version }));
+        return Err(ImageError::at(
+            8,
+            K::UnsupportedVersion { found: h.version },
+        ));
     }
     if h.header_size as u64 != hsize {
-        return Err(ImageError::at(12, K::HeaderSize { found: h.header_size }));
+        return Err(ImageError::at(
+            12,
+            K::HeaderSize {
+                found: h.header_size,
+            },
+        ));
     }
     if h.bands == 0 || h.bands as usize > MAX_BANDS {
         return Err(ImageError::at(16, K::Bands { found: h.bands }));
@@ -124,14 +143,26 @@ fn read_header<S: SceneSource>(src: &S) -> Result<Header, ImageError> {
         return Err(ImageError::at(28, K::Reserved));
     }
     if h.file_size != len {
-        return Err(ImageError::at(32, K::FileSize { claimed: h.file_size, actual: len }));
+        return Err(ImageError::at(
+            32,
+            K::FileSize {
+                claimed: h.file_size,
+                actual: len,
+            },
+        ));
     }
     let mut counts = [0u64; SECTION_COUNT];
     for s in Section::ALL {
         let e = h.section(s);
         let at = 40 + 24 * s as u64;
         if e.record_size != s.record_size() {
-            return Err(ImageError::at(at + 16, K::RecordSize { section: s, found: e.record_size }));
+            return Err(ImageError::at(
+                at + 16,
+                K::RecordSize {
+                    section: s,
+                    found: e.record_size,
+                },
+            ));
         }
         if e.reserved != 0 {
             return Err(ImageError::at(at + 20, K::Reserved));
@@ -141,16 +172,34 @@ fn read_header<S: SceneSource>(src: &S) -> Result<Header, ImageError> {
         }
         counts[s as usize] = e.count;
     }
-    let layout = ImageLayout::new(&counts).ok_or(ImageError::at(40, K::SectionTooLarge { section: Section::StringBytes }))?;
+    let layout = ImageLayout::new(&counts).ok_or(ImageError::at(
+        40,
+        K::SectionTooLarge {
+            section: Section::StringBytes,
+        },
+    ))?;
     for s in Section::ALL {
         let expected = layout.sections[s as usize].offset;
         let found = h.section(s).offset;
         if expected != found {
-            return Err(ImageError::at(40 + 24 * s as u64, K::SectionOffset { section: s, expected, found }));
+            return Err(ImageError::at(
+                40 + 24 * s as u64,
+                K::SectionOffset {
+                    section: s,
+                    expected,
+                    found,
+                },
+            ));
         }
     }
     if layout.file_size != len {
-        return Err(ImageError::at(32, K::FileSize { claimed: layout.file_size, actual: len }));
+        return Err(ImageError::at(
+            32,
+            K::FileSize {
+                claimed: layout.file_size,
+                actual: len,
+            },
+        ));
     }
     Ok(h)
 }
@@ -168,7 +217,8 @@ fn check_padding<S: SceneSource>(src: &S, h: &Header) -> Result<(), ImageError> 
         if gap > 0 {
             let mut pad = [0u8; 8];
             let pad = &mut pad[..gap.min(8)];
-            src.read_at(at, pad).map_err(|e| ImageError::at(at, K::Source(e)))?;
+            src.read_at(at, pad)
+                .map_err(|e| ImageError::at(at, K::Source(e)))?;
             if pad.iter().any(|&b| b != 0) {
                 return Err(ImageError::at(at, K::Padding));
             }
@@ -200,7 +250,8 @@ fn check_strings<S: SceneSource>(src: &S, h: &Header) -> Result<(), ImageError> 
         }
         let dst = &mut buf[..r.len as usize];
         let at = bytes.offset + r.offset as u64;
-        src.read_at(at, dst).map_err(|e| ImageError::at(at, K::Source(e)))?;
+        src.read_at(at, dst)
+            .map_err(|e| ImageError::at(at, K::Source(e)))?;
         if core::str::from_utf8(dst).is_err() {
             return Err(ImageError::at(at, K::StringUtf8 { string: i as u32 }));
         }
@@ -250,7 +301,13 @@ fn check_materials<S: SceneSource>(src: &S, h: &Header) -> Result<(), ImageError
             return Err(ImageError::at(at + 8, K::MaterialValues { material }));
         }
         let mut vals = [0.0f32; 5 * MAX_BANDS];
-        read_records(src, h, Section::Values, m.values as u64, &mut vals[..n as usize])?;
+        read_records(
+            src,
+            h,
+            Section::Values,
+            m.values as u64,
+            &mut vals[..n as usize],
+        )?;
         let data = MaterialData::from_values(h.bands as u8, two, &vals[..n as usize]);
         if let Err(error) = data.check() {
             return Err(ImageError::at(at, K::Material { material, error }));
@@ -299,7 +356,11 @@ struct Walk {
     verts: Window<[f32; 3], 128>,
 }
 
-fn check_trees<S: SceneSource>(src: &S, h: &Header, info: &mut SceneInfo) -> Result<(), ImageError> {
+fn check_trees<S: SceneSource>(
+    src: &S,
+    h: &Header,
+    info: &mut SceneInfo,
+) -> Result<(), ImageError> {
     let n_nodes = h.section(Section::Nodes).count;
     let mut walk = Walk {
         poly: 0,
@@ -329,16 +390,41 @@ fn check_trees<S: SceneSource>(src: &S, h: &Header, info: &mut SceneInfo) -> Res
         next_root = end as u64;
     }
     if h.scene_root as u64 != next_root || next_root >= n_nodes {
-        let kind = if n_nodes == 0 { K::NoScene } else { K::SceneRoot };
+        let kind = if n_nodes == 0 {
+            K::NoScene
+        } else {
+            K::SceneRoot
+        };
         return Err(ImageError::at(24, kind));
     }
-    let (_, sum) = check_tree(src, h, &mut walk, info, h.scene_root, Some(n_nodes as u32), n_orig as u32)?;
+    let (_, sum) = check_tree(
+        src,
+        h,
+        &mut walk,
+        info,
+        h.scene_root,
+        Some(n_nodes as u32),
+        n_orig as u32,
+    )?;
     info.expanded_polygons = sum.expanded;
     info.instancing_depth = sum.depth;
-    for (s, used) in [(Section::Polygons, walk.poly), (Section::Vertices, walk.vert), (Section::Instances, walk.inst)] {
+    for (s, used) in [
+        (Section::Polygons, walk.poly),
+        (Section::Vertices, walk.vert),
+        (Section::Instances, walk.inst),
+    ] {
         let count = h.section(s).count;
         if used != count {
-            return err(h, s, used, K::Unowned { section: s, used, count });
+            return err(
+                h,
+                s,
+                used,
+                K::Unowned {
+                    section: s,
+                    used,
+                    count,
+                },
+            );
         }
     }
     Ok(())
@@ -366,11 +452,20 @@ fn check_tree<S: SceneSource>(
     let root_rec = walk.nodes.get(src, h, root as u64)?;
     let end = tree_end.unwrap_or(root_rec.subtree_end);
     if root_rec.subtree_end != end || end <= root || end as u64 > h.section(Section::Nodes).count {
-        let kind = if tree_end.is_some() { K::SceneRoot } else { K::SubtreeEnd { node: root } };
+        let kind = if tree_end.is_some() {
+            K::SceneRoot
+        } else {
+            K::SubtreeEnd { node: root }
+        };
         return err(h, Section::Nodes, root as u64, kind);
     }
     if root_rec.instance != NONE {
-        return err(h, Section::Nodes, root as u64, K::RootIsInstance { node: root });
+        return err(
+            h,
+            Section::Nodes,
+            root as u64,
+            K::RootIsInstance { node: root },
+        );
     }
     let mut result = None;
     for i in root..end {
@@ -395,7 +490,11 @@ fn check_tree<S: SceneSource>(
             instance: rec.instance,
             stored_bbox: Aabb::new(rec.bbox_min.into(), rec.bbox_max.into()),
             stored_expanded: rec.expanded_polygons,
-            acc: Summary { expanded: rec.poly_count as u64, bbox: own, depth: 0 },
+            acc: Summary {
+                expanded: rec.poly_count as u64,
+                bbox: own,
+                depth: 0,
+            },
         };
         if stack.push(frame).is_err() {
             return Err(ImageError::at(at, K::TooDeep { node: i }));
@@ -409,11 +508,15 @@ fn check_tree<S: SceneSource>(
             let (sum, contributes) = finish(src, h, &done)?;
             match stack.last_mut() {
                 Some(parent) => {
-                    parent.acc.expanded = parent
-                        .acc
-                        .expanded
-                        .checked_add(sum.expanded)
-                        .ok_or(ImageError::at(at, K::ExpansionOverflow { node: parent.node }))?;
+                    parent.acc.expanded =
+                        parent
+                            .acc
+                            .expanded
+                            .checked_add(sum.expanded)
+                            .ok_or(ImageError::at(
+                                at,
+                                K::ExpansionOverflow { node: parent.node },
+                            ))?;
                     if contributes {
                         parent.acc.bbox = parent.acc.bbox.union(sum.bbox);
                     }
@@ -431,7 +534,9 @@ fn check_tree<S: SceneSource>(
 
 fn check_node_fields(h: &Header, at: u64, i: u32, rec: &NodeRecord) -> Result<(), ImageError> {
     check_name(h, at + 60, rec.name)?;
-    if rec.flags & !HAS_AGE != 0 || (rec.flags & HAS_AGE != 0 && !(rec.age >= 0.0 && rec.age.is_finite())) {
+    if rec.flags & !HAS_AGE != 0
+        || (rec.flags & HAS_AGE != 0 && !(rec.age >= 0.0 && rec.age.is_finite()))
+    {
         return Err(ImageError::at(at + 68, K::NodeAttributes { node: i }));
     }
     if rec.flags & HAS_AGE == 0 && rec.age != 0.0 {
@@ -449,7 +554,10 @@ fn check_own_geometry<S: SceneSource>(
     rec: &NodeRecord,
 ) -> Result<Aabb, ImageError> {
     let at = offset_of(h, Section::Nodes, i as u64);
-    let (n_poly, n_vert) = (h.section(Section::Polygons).count, h.section(Section::Vertices).count);
+    let (n_poly, n_vert) = (
+        h.section(Section::Polygons).count,
+        h.section(Section::Vertices).count,
+    );
     if rec.poly_first as u64 != walk.poly || walk.poly + rec.poly_count as u64 > n_poly {
         return Err(ImageError::at(at + 36, K::PolygonRange { node: i }));
     }
@@ -471,12 +579,31 @@ fn check_own_geometry<S: SceneSource>(
         for (c, corner) in corners.iter_mut().enumerate().take(n) {
             let idx = poly.corners[c];
             if idx >= rec.vert_count {
-                return err(h, Section::Polygons, p, K::Corner { polygon, corner: c as u8 });
+                return err(
+                    h,
+                    Section::Polygons,
+                    p,
+                    K::Corner {
+                        polygon,
+                        corner: c as u8,
+                    },
+                );
             }
-            *corner = walk.verts.get(src, h, rec.vert_first as u64 + idx as u64)?.into();
+            *corner = walk
+                .verts
+                .get(src, h, rec.vert_first as u64 + idx as u64)?
+                .into();
         }
         if poly.material as u64 >= n_mat {
-            return err(h, Section::Polygons, p, K::PolygonMaterial { polygon, material: poly.material });
+            return err(
+                h,
+                Section::Polygons,
+                p,
+                K::PolygonMaterial {
+                    polygon,
+                    material: poly.material,
+                },
+            );
         }
         if let Err(error) = polygon_shape(&corners[..n]) {
             return err(h, Section::Polygons, p, K::Shape { polygon, error });
@@ -496,7 +623,13 @@ fn check_instance_node<S: SceneSource>(
 ) -> Result<(), ImageError> {
     let at = offset_of(h, Section::Nodes, i as u64);
     if rec.instance as u64 != walk.inst || walk.inst >= h.section(Section::Instances).count {
-        return Err(ImageError::at(at + 52, K::InstanceOrder { node: i, instance: rec.instance }));
+        return Err(ImageError::at(
+            at + 52,
+            K::InstanceOrder {
+                node: i,
+                instance: rec.instance,
+            },
+        ));
     }
     walk.inst += 1;
     let inst = load_instance(src, h, rec.instance)?;
@@ -522,20 +655,36 @@ fn check_instance_node<S: SceneSource>(
 }
 
 /// Reads and checks an instance record.
-fn load_instance<S: SceneSource>(src: &S, h: &Header, id: u32) -> Result<InstanceRecord, ImageError> {
+fn load_instance<S: SceneSource>(
+    src: &S,
+    h: &Header,
+    id: u32,
+) -> Result<InstanceRecord, ImageError> {
     let inst: InstanceRecord = one(src, h, Section::Instances, id as u64)?;
     let iat = offset_of(h, Section::Instances, id as u64);
     if inst.flags & !EXACT != 0 {
         return Err(ImageError::at(iat + 4, K::InstanceFlags { instance: id }));
     }
     if let Err(error) = similarity(&inst) {
-        return Err(ImageError::at(iat + 8, K::Transform { instance: id, error }));
+        return Err(ImageError::at(
+            iat + 8,
+            K::Transform {
+                instance: id,
+                error,
+            },
+        ));
     }
     Ok(inst)
 }
 
-pub(crate) fn similarity(inst: &InstanceRecord) -> Result<Similarity, crate::geometry::TransformError> {
-    Similarity::checked(Quat::from_array(inst.rotation), inst.translation.into(), inst.scale)
+pub(crate) fn similarity(
+    inst: &InstanceRecord,
+) -> Result<Similarity, crate::geometry::TransformError> {
+    Similarity::checked(
+        Quat::from_array(inst.rotation),
+        inst.translation.into(),
+        inst.scale,
+    )
 }
 
 /// Completes a node: computes what it stands for, checks its stored box and count, and
@@ -547,7 +696,15 @@ fn finish<S: SceneSource>(src: &S, h: &Header, f: &Frame) -> Result<(Summary, bo
         f.acc
     } else {
         let inst = load_instance(src, h, f.instance)?;
-        let t = similarity(&inst).map_err(|error| ImageError::at(at, K::Transform { instance: f.instance, error }))?;
+        let t = similarity(&inst).map_err(|error| {
+            ImageError::at(
+                at,
+                K::Transform {
+                    instance: f.instance,
+                    error,
+                },
+            )
+        })?;
         let o: OriginalRecord = one(src, h, Section::Originals, inst.original as u64)?;
         let root: NodeRecord = one(src, h, Section::Nodes, o.root as u64)?;
         let root_box = if o.expanded_polygons == 0 {
@@ -556,7 +713,11 @@ fn finish<S: SceneSource>(src: &S, h: &Header, f: &Frame) -> Result<(Summary, bo
             t.aabb(&Aabb::new(root.bbox_min.into(), root.bbox_max.into()))
         };
         if inst.is_exact() {
-            Summary { expanded: o.expanded_polygons, bbox: root_box, depth: o.instancing_depth.saturating_add(1) }
+            Summary {
+                expanded: o.expanded_polygons,
+                bbox: root_box,
+                depth: o.instancing_depth.saturating_add(1),
+            }
         } else {
             Summary {
                 expanded: f.acc.expanded,
@@ -575,7 +736,13 @@ fn finish<S: SceneSource>(src: &S, h: &Header, f: &Frame) -> Result<(Summary, bo
         return Err(ImageError::at(at, K::Bbox { node }));
     }
     let contributes = !computed.bbox.is_empty();
-    Ok((Summary { bbox: f.stored_bbox, ..computed }, contributes))
+    Ok((
+        Summary {
+            bbox: f.stored_bbox,
+            ..computed
+        },
+        contributes,
+    ))
 }
 
 fn check_lights<S: SceneSource>(src: &S, h: &Header, s: Section) -> Result<(), ImageError> {
@@ -592,7 +759,13 @@ fn check_lights<S: SceneSource>(src: &S, h: &Header, s: Section) -> Result<(), I
             return err(h, s, i, K::LightValues { light });
         }
         let mut irr = [0.0f32; MAX_BANDS];
-        read_records(src, h, Section::Values, l.values as u64, &mut irr[..h.bands as usize])?;
+        read_records(
+            src,
+            h,
+            Section::Values,
+            l.values as u64,
+            &mut irr[..h.bands as usize],
+        )?;
         if irr.iter().any(|&v| v < 0.0) {
             return err(h, s, i, K::LightValues { light });
         }

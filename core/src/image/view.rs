@@ -169,14 +169,25 @@ impl<S: SceneSource> SceneView<S> {
         let n = MaterialData::value_count(self.info.bands, two) as usize;
         let mut vals = [0.0f32; 5 * MAX_BANDS];
         self.read(Section::Values, rec.values as u64, &mut vals[..n])?;
-        Ok(MaterialData::from_values(self.info.bands as u8, two, &vals[..n]))
+        Ok(MaterialData::from_values(
+            self.info.bands as u8,
+            two,
+            &vals[..n],
+        ))
     }
 
     fn light(&self, s: Section, id: LightId) -> Result<LightData, ImageError> {
         let rec: LightRecord = self.one(s, id.0 as u64)?;
         let mut irr = [0.0f32; MAX_BANDS];
-        self.read(Section::Values, rec.values as u64, &mut irr[..self.info.bands as usize])?;
-        Ok(LightData { towards: Vec3::from(rec.towards), irradiance: irr })
+        self.read(
+            Section::Values,
+            rec.values as u64,
+            &mut irr[..self.info.bands as usize],
+        )?;
+        Ok(LightData {
+            towards: Vec3::from(rec.towards),
+            irradiance: irr,
+        })
     }
 
     /// One directional source.
@@ -215,11 +226,15 @@ impl<S: SceneSource> SceneView<S> {
         let r: StringRef = self.one(Section::Strings, id.0 as u64)?;
         let at = self.header.section(Section::StringBytes).offset + r.offset as u64;
         let len = r.len as usize;
-        let dst = buf
-            .get_mut(..len)
-            .ok_or(ImageError::at(at, ImageErrorKind::StringRange { string: id.0 }))?;
-        self.src.read_at(at, dst).map_err(|e| ImageError::at(at, ImageErrorKind::Source(e)))?;
-        core::str::from_utf8(dst).map_err(|_| ImageError::at(at, ImageErrorKind::StringUtf8 { string: id.0 }))
+        let dst = buf.get_mut(..len).ok_or(ImageError::at(
+            at,
+            ImageErrorKind::StringRange { string: id.0 },
+        ))?;
+        self.src
+            .read_at(at, dst)
+            .map_err(|e| ImageError::at(at, ImageErrorKind::Source(e)))?;
+        core::str::from_utf8(dst)
+            .map_err(|_| ImageError::at(at, ImageErrorKind::StringUtf8 { string: id.0 }))
     }
 
     /// Length in bytes of a name (at most [`MAX_NAME_BYTES`]).
@@ -242,7 +257,13 @@ pub(crate) fn read_records<S: SceneSource, T: Pod>(
     let at = e.offset.saturating_add(first.saturating_mul(size));
     let end = first.checked_add(out.len() as u64);
     if size != e.record_size as u64 || end.is_none_or(|end| end > e.count) {
-        return Err(ImageError::at(at, ImageErrorKind::OutOfRange { section: s, index: first }));
+        return Err(ImageError::at(
+            at,
+            ImageErrorKind::OutOfRange {
+                section: s,
+                index: first,
+            },
+        ));
     }
     if out.is_empty() {
         return Ok(());
