@@ -1,6 +1,8 @@
 //! hirad runner: the std side of hirad. Scene model, text (`.hir`) and OBJ/MTL formats,
-//! compilation to the core's binary image, and the `hirad` command line.
+//! compilation to the core's binary image, files, and the `hirad` command line.
 
+pub mod cli;
+pub mod files;
 pub mod obj;
 pub mod scene;
 pub mod text;

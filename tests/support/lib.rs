@@ -2,6 +2,8 @@
 
 use std::path::PathBuf;
 
+pub mod sample;
+
 /// Path of a file in `fixtures/`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

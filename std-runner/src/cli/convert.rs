@@ -1,0 +1,98 @@
+//! `hirad convert SCENE -o OUT`.
+
+use super::progress::Progress;
+use crate::files::{self, Format};
+use anyhow::{Context, Result, anyhow, bail};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `hirad convert`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Input scene (.hir, .hirb or .obj).
+    pub scene: PathBuf,
+    /// Output scene; its extension chooses the format (.hir, .hirb or .obj). An .obj output
+    /// is the expanded scene (OBJ has no instances), with its materials in the .mtl beside it.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Do not print warnings or progress.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `hirad convert`.
+pub fn run(a: Args) -> Result<()> {
+    let out_format = Format::of(&a.output)?;
+    check_distinct(&a.scene, &a.output)?;
+    let loaded = files::load_scene(&a.scene)?;
+    super::warn_all(&loaded.warnings, a.quiet);
+    match out_format {
+        Format::Text => {
+            // Compiling checks the scene, so a .hir output always reads back.
+            files::compile(&a.scene, &loaded.scene)?;
+            let text = crate::text::print(&loaded.scene);
+            files::write_atomic(&a.output, |w| Ok(w.write_all(text.as_bytes())?))?;
+        }
+        Format::Binary => {
+            let bytes = files::compile(&a.scene, &loaded.scene)?;
+            files::write_atomic(&a.output, |w| Ok(w.write_all(&bytes)?))?;
+        }
+        Format::Obj => {
+            let stats = write_obj(&a.scene, &loaded.scene, &a.output, a.quiet)?;
+            super::warn_all(&stats.warnings, a.quiet);
+        }
+    }
+    if !a.quiet {
+        eprintln!("wrote {}", a.output.display());
+    }
+    Ok(())
+}
+
+/// Refuses to overwrite the input with the output.
+pub(crate) fn check_distinct(input: &Path, output: &Path) -> Result<()> {
+    if let (Ok(i), Ok(o)) = (input.canonicalize(), output.canonicalize())
+        && i == o
+    {
+        bail!("{}: the output would overwrite the input", output.display());
+    }
+    Ok(())
+}
+
+/// Writes the expanded scene as OBJ + MTL through temporary files, renaming both into place
+/// only when both are complete.
+pub(crate) fn write_obj(
+    input: &Path,
+    scene: &crate::scene::Scene,
+    out: &Path,
+    quiet: bool,
+) -> Result<crate::obj::ObjExport> {
+    files::compile(input, scene)?;
+    let mtl_path = super::mtl_beside(out);
+    let mtl_name = mtl_path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| anyhow!("{}: output name is not valid UTF-8", out.display()))?
+        .to_string();
+    let obj_tmp = files::temp_beside(out)?;
+    let mtl_tmp = files::temp_beside(&mtl_path)?;
+    let mut obj_w = Progress::new(
+        std::io::BufWriter::new(obj_tmp.as_file()),
+        "writing OBJ",
+        quiet,
+    );
+    let mut mtl_w = std::io::BufWriter::new(mtl_tmp.as_file());
+    let stats = crate::obj::export(scene, &mtl_name, &mut obj_w, &mut mtl_w)
+        .with_context(|| format!("{}: cannot write", out.display()))?;
+    obj_w
+        .flush()
+        .with_context(|| format!("{}: cannot write", out.display()))?;
+    obj_w.finish();
+    mtl_w
+        .flush()
+        .with_context(|| format!("{}: cannot write", mtl_path.display()))?;
+    drop(obj_w);
+    drop(mtl_w);
+    files::persist(mtl_tmp, &mtl_path)?;
+    files::persist(obj_tmp, out)?;
+    Ok(stats)
+}

@@ -1,0 +1,46 @@
+//! `hirad flatten SCENE -o OUT.obj`.
+
+use crate::files::{self, Format};
+use anyhow::{Result, bail};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `hirad flatten`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Input scene (.hir, .hirb or .obj).
+    pub scene: PathBuf,
+    /// Output .obj; materials go to the .mtl beside it. Face k (1-based) is the polygon with
+    /// global id k-1.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Do not print warnings, progress or the summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `hirad flatten`.
+pub fn run(a: Args) -> Result<()> {
+    if Format::of(&a.output).ok() != Some(Format::Obj) {
+        bail!(
+            "{}: flatten writes Wavefront OBJ; give an output ending in .obj",
+            a.output.display()
+        );
+    }
+    super::convert::check_distinct(&a.scene, &a.output)?;
+    let start = Instant::now();
+    let loaded = files::load_scene(&a.scene)?;
+    super::warn_all(&loaded.warnings, a.quiet);
+    let stats = super::convert::write_obj(&a.scene, &loaded.scene, &a.output, a.quiet)?;
+    super::warn_all(&stats.warnings, a.quiet);
+    if !a.quiet {
+        eprintln!(
+            "flattened {} faces, {} vertices into {} in {:.2} s",
+            stats.faces,
+            stats.vertices,
+            a.output.display(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}

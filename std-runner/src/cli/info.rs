@@ -1,0 +1,181 @@
+//! `hirad info SCENE`.
+
+use crate::files::{self, Format};
+use anyhow::Result;
+use hirad_core::MaterialId;
+use hirad_core::image::{SceneSource, SceneView};
+use hirad_core::limits::MAX_NAME_BYTES;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Arguments of `hirad info`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file (.hir, .hirb or .obj).
+    pub scene: PathBuf,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Do not print loader warnings.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// What `info` reports.
+struct Report {
+    format: Format,
+    bands: u32,
+    band_names: Vec<String>,
+    materials: u32,
+    two_sided: u32,
+    emitting: u32,
+    info: hirad_core::image::SceneInfo,
+}
+
+fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
+    let info = *v.info();
+    let mut r = Report {
+        format,
+        bands: info.bands,
+        band_names: Vec::new(),
+        materials: info.materials,
+        two_sided: 0,
+        emitting: 0,
+        info,
+    };
+    let mut buf = [0u8; MAX_NAME_BYTES];
+    for b in 0..info.bands {
+        if let Some(id) = v.band_name(b)? {
+            r.band_names.push(v.string(id, &mut buf)?.to_string());
+        }
+    }
+    for m in 0..info.materials {
+        let d = v.material(MaterialId(m))?;
+        let n = d.bands as usize;
+        r.two_sided += d.two_sided as u32;
+        r.emitting += (d.emit_front[..n]
+            .iter()
+            .chain(&d.emit_back[..n])
+            .any(|&e| e > 0.0)) as u32;
+    }
+    Ok(r)
+}
+
+/// Runs `hirad info`.
+pub fn run(a: Args) -> Result<()> {
+    let format = Format::of(&a.scene)?;
+    let r = if format == Format::Binary {
+        report(format, &files::open_image(&a.scene)?)?
+    } else {
+        let loaded = files::load_scene(&a.scene)?;
+        super::warn_all(&loaded.warnings, a.quiet);
+        let bytes = files::compile(&a.scene, &loaded.scene)?;
+        let view = crate::scene::read_image(&bytes)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", a.scene.display()))?;
+        report(format, &view)?
+    };
+    print!(
+        "{}",
+        if a.json {
+            json(&a.scene, &r)
+        } else {
+            table(&a.scene, &r)
+        }
+    );
+    Ok(())
+}
+
+fn table(path: &std::path::Path, r: &Report) -> String {
+    let i = &r.info;
+    let mut s = String::new();
+    let names = if r.band_names.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", r.band_names.join(" "))
+    };
+    let _ = writeln!(s, "scene             {}", path.display());
+    let _ = writeln!(s, "format            {}", r.format.name());
+    let _ = writeln!(s, "bands             {}{names}", r.bands);
+    let _ = writeln!(
+        s,
+        "materials         {} ({} two-sided, {} emitting)",
+        r.materials, r.two_sided, r.emitting
+    );
+    let _ = writeln!(s, "polygons          {}", i.expanded_polygons);
+    let _ = writeln!(
+        s,
+        "stored polygons   {} ({} vertices)",
+        i.polygons, i.vertices
+    );
+    let _ = writeln!(s, "clusters          {}", i.clusters);
+    let _ = writeln!(s, "originals         {}", i.originals);
+    let _ = writeln!(
+        s,
+        "instances         {} ({} exact, {} approximate)",
+        i.exact_instances + i.approximate_instances,
+        i.exact_instances,
+        i.approximate_instances
+    );
+    let _ = writeln!(s, "instancing depth  {}", i.instancing_depth);
+    let _ = writeln!(s, "cluster depth     {}", i.max_node_depth);
+    let _ = writeln!(
+        s,
+        "lights            {} suns, {} sky directions",
+        i.suns, i.sky
+    );
+    let _ = writeln!(s, "cameras           {}", i.cameras);
+    let _ = writeln!(s, "binary image      {} bytes", i.image_bytes);
+    s
+}
+
+fn json(path: &std::path::Path, r: &Report) -> String {
+    let i = &r.info;
+    let names: Vec<String> = r.band_names.iter().map(|n| json_str(n)).collect();
+    format!(
+        concat!(
+            "{{\"scene\":{},\"format\":{},\"bands\":{},\"band_names\":[{}],\"materials\":{},",
+            "\"two_sided_materials\":{},\"emitting_materials\":{},\"polygons\":{},\"stored_polygons\":{},",
+            "\"vertices\":{},\"clusters\":{},\"originals\":{},\"exact_instances\":{},",
+            "\"approximate_instances\":{},\"instancing_depth\":{},\"cluster_depth\":{},\"suns\":{},",
+            "\"sky_directions\":{},\"cameras\":{},\"image_bytes\":{}}}\n"
+        ),
+        json_str(&path.display().to_string()),
+        json_str(r.format.name()),
+        r.bands,
+        names.join(","),
+        r.materials,
+        r.two_sided,
+        r.emitting,
+        i.expanded_polygons,
+        i.polygons,
+        i.vertices,
+        i.clusters,
+        i.originals,
+        i.exact_instances,
+        i.approximate_instances,
+        i.instancing_depth,
+        i.max_node_depth,
+        i.suns,
+        i.sky,
+        i.cameras,
+        i.image_bytes
+    )
+}
+
+/// A JSON string literal.
+pub(crate) fn json_str(s: &str) -> String {
+    let mut o = String::with_capacity(s.len() + 2);
+    o.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => o.push_str("\\\""),
+            '\\' => o.push_str("\\\\"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(o, "\\u{:04x}", c as u32);
+            }
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}

@@ -1,0 +1,65 @@
+//! The `hirad` commands. Each command lives in its own file; errors carry the file and the
+//! location of the fault and end the process with a non-zero status.
+
+mod convert;
+mod flatten;
+mod info;
+mod progress;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+/// hirad: radiosity (diffuse global illumination) for huge scenes that repeat themselves.
+///
+/// Scenes are read from `.hir` (text), `.hirb` (binary image) or `.obj` (+ `.mtl`) files.
+/// Units: metres, W/m^2.
+#[derive(Parser, Debug)]
+#[command(name = "hirad", version, about, long_about = None)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Describe a scene: bands, materials, polygons after expansion, clusters, originals,
+    /// instances, instancing depth, size of the binary image.
+    Info(info::Args),
+    /// Convert a scene between .hir, .hirb and .obj (an .obj output is the expanded scene,
+    /// with its .mtl beside it).
+    Convert(convert::Args),
+    /// Expand every instance and write the scene as OBJ, faces in global-id order, materials
+    /// in the .mtl beside it.
+    Flatten(flatten::Args),
+}
+
+/// Parses the command line and runs the command.
+pub fn run() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Info(a) => info::run(a),
+        Command::Convert(a) => convert::run(a),
+        Command::Flatten(a) => flatten::run(a),
+    }
+}
+
+/// Prints loader warnings to stderr.
+pub(crate) fn warn_all(warnings: &[String], quiet: bool) {
+    if quiet {
+        return;
+    }
+    const SHOWN: usize = 20;
+    for w in warnings.iter().take(SHOWN) {
+        eprintln!("warning: {w}");
+    }
+    if warnings.len() > SHOWN {
+        eprintln!("warning: ... and {} more warnings", warnings.len() - SHOWN);
+    }
+}
+
+/// The `.mtl` path beside an `.obj` path.
+pub(crate) fn mtl_beside(obj: &std::path::Path) -> PathBuf {
+    obj.with_extension("mtl")
+}

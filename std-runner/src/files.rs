@@ -1,0 +1,230 @@
+//! Scene files on disk: format detection, loading with located errors, a file-backed image
+//! source, and writing outputs atomically (temporary name, then rename).
+
+use crate::scene::{self, Scene};
+use crate::{obj, text};
+use anyhow::{Context, Result, anyhow, bail};
+use hirad_core::image::{SceneSource, SceneView, SourceError};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The scene formats hirad reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// `.hir`: the text format.
+    Text,
+    /// `.hirb`: the binary image.
+    Binary,
+    /// `.obj` (+ `.mtl`): Wavefront OBJ.
+    Obj,
+}
+
+impl Format {
+    /// The format named by a path's extension.
+    pub fn of(path: &Path) -> Result<Format> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("hir") => Ok(Format::Text),
+            Some("hirb") => Ok(Format::Binary),
+            Some("obj") => Ok(Format::Obj),
+            _ => bail!(
+                "{}: unknown scene format; expected a .hir, .hirb or .obj file",
+                path.display()
+            ),
+        }
+    }
+
+    /// Short name for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Text => "hir (text)",
+            Format::Binary => "hirb (binary image)",
+            Format::Obj => "obj (Wavefront)",
+        }
+    }
+}
+
+/// A scene image read from a file with positioned reads: validation and level loading read
+/// it piece by piece, so the file never has to fit in memory.
+#[derive(Debug)]
+pub struct FileSource {
+    file: File,
+    len: u64,
+}
+
+impl FileSource {
+    /// Opens a `.hirb` file.
+    pub fn open(path: &Path) -> Result<Self> {
+        let file = File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
+        let len = file
+            .metadata()
+            .with_context(|| format!("{}: cannot stat", path.display()))?
+            .len();
+        Ok(FileSource { file, len })
+    }
+}
+
+impl SceneSource for FileSource {
+    fn len(&self) -> u64 {
+        self.len
+    }
+
+    fn read_at(&self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
+        let end = offset
+            .checked_add(buf.len() as u64)
+            .ok_or(SourceError::OutOfRange)?;
+        if end > self.len {
+            return Err(SourceError::OutOfRange);
+        }
+        read_exact_at(&self.file, offset, buf)
+            .map_err(|e| SourceError::Io(e.raw_os_error().unwrap_or(-1)))
+    }
+}
+
+#[cfg(unix)]
+fn read_exact_at(f: &File, offset: u64, buf: &mut [u8]) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(f, buf, offset)
+}
+
+#[cfg(windows)]
+fn read_exact_at(f: &File, mut offset: u64, mut buf: &mut [u8]) -> std::io::Result<()> {
+    use std::os::windows::fs::FileExt;
+    while !buf.is_empty() {
+        match f.seek_read(buf, offset)? {
+            0 => return Err(std::io::ErrorKind::UnexpectedEof.into()),
+            n => {
+                buf = &mut buf[n..];
+                offset += n as u64;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Opens and validates a `.hirb` file without reading it whole.
+pub fn open_image(path: &Path) -> Result<SceneView<FileSource>> {
+    let src = FileSource::open(path)?;
+    SceneView::open(src).map_err(|e| anyhow!("{}: {e}", path.display()))
+}
+
+/// A loaded scene and the notes the loader made.
+pub struct Loaded {
+    /// The scene model.
+    pub scene: Scene,
+    /// The format it came from.
+    pub format: Format,
+    /// Loader warnings, already prefixed with the file.
+    pub warnings: Vec<String>,
+}
+
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))
+}
+
+/// Loads a scene from `.hir`, `.hirb` or `.obj`; every error names the file and the line and
+/// column (text) or byte offset (binary) of the fault.
+pub fn load_scene(path: &Path) -> Result<Loaded> {
+    let format = Format::of(path)?;
+    let mut warnings = Vec::new();
+    let scene = match format {
+        Format::Text => {
+            let bytes = read(path)?;
+            text::parse(&bytes).map_err(|e| anyhow!("{}:{e}", path.display()))?
+        }
+        Format::Binary => {
+            let view = open_image(path)?;
+            scene::decompile(&view).map_err(|e| anyhow!("{}: {e}", path.display()))?
+        }
+        Format::Obj => {
+            let bytes = read(path)?;
+            let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            let mut load_mtl = |name: &str| -> Result<Vec<u8>, String> {
+                let p = dir.join(name);
+                std::fs::read(&p)
+                    .map_err(|e| format!("cannot read material library {}: {e}", p.display()))
+            };
+            let imported = obj::import(&bytes, &mut load_mtl).map_err(|e| {
+                if e.file.is_empty() {
+                    anyhow!("{}:{e}", path.display())
+                } else {
+                    anyhow!("{}", relocate(&dir, &e))
+                }
+            })?;
+            for w in imported.warnings {
+                warnings.push(format!("{}:{w}", path.display()));
+            }
+            imported.scene
+        }
+    };
+    Ok(Loaded {
+        scene,
+        format,
+        warnings,
+    })
+}
+
+fn relocate(dir: &Path, e: &obj::ObjError) -> String {
+    format!(
+        "{}:{}:{}: {}",
+        dir.join(&e.file).display(),
+        e.line,
+        e.column,
+        e.message
+    )
+}
+
+/// Compiles a loaded scene into its binary image, with the file named in errors.
+pub fn compile(path: &Path, scene: &Scene) -> Result<Vec<u8>> {
+    scene::compile(scene).map_err(|e| anyhow!("{}: {e}", path.display()))
+}
+
+/// Writes `path` through a temporary file in the same directory, renamed into place only
+/// when `write` succeeded: a failed run never leaves a half-written output.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let tmp = temp_beside(path)?;
+    let mut w = BufWriter::new(tmp);
+    write(&mut w)?;
+    let tmp = w
+        .into_inner()
+        .map_err(|e| anyhow!("{}: cannot write: {}", path.display(), e.error()))?;
+    persist(tmp, path)
+}
+
+/// A temporary file in the directory of `path`.
+pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let stem = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    tempfile::Builder::new()
+        .prefix(&format!(".{stem}."))
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .with_context(|| {
+            format!(
+                "{}: cannot create a temporary file in {}",
+                path.display(),
+                dir.display()
+            )
+        })
+}
+
+/// Flushes a finished temporary file to disk and renames it to `path`.
+pub fn persist(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
+    tmp.as_file()
+        .sync_all()
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    tmp.persist(path).map_err(|e| {
+        anyhow!(
+            "{}: cannot rename the finished file into place: {}",
+            path.display(),
+            e.error
+        )
+    })?;
+    Ok(())
+}
