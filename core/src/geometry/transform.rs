@@ -54,7 +54,7 @@ impl Similarity {
         if (rotation.length_squared() - 1.0).abs() > UNIT_TOLERANCE {
             return Err(TransformError::RotationNotUnit);
         }
-        if !(scale > 0.0) || !scale.is_normal() {
+        if scale <= 0.0 || !scale.is_normal() {
             return Err(TransformError::Scale);
         }
         Ok(Similarity {

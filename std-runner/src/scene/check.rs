@@ -199,9 +199,9 @@ impl Scene {
             let ppath = format!("{path} > polygon {i}");
             let n = p.corner_count();
             let mut corners = [glam::Vec3::ZERO; 4];
-            for k in 0..n {
+            for (k, corner) in corners.iter_mut().enumerate().take(n) {
                 match c.vertices.get(p.corners[k] as usize) {
-                    Some(v) => corners[k] = *v,
+                    Some(v) => *corner = *v,
                     None => {
                         return fail(
                             &ppath,
