@@ -1,0 +1,178 @@
+//! The `hirad` binary end to end: every command on every fixture, round trips between the
+//! formats, located errors with a non-zero status, and no output left behind on failure.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn hirad(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hirad")).args(args).output().expect("run hirad")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = hirad(args);
+    assert!(
+        out.status.success(),
+        "hirad {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs a command that must fail; returns its stderr.
+fn fails(args: &[&str]) -> String {
+    let out = hirad(args);
+    assert!(!out.status.success(), "hirad {args:?} should fail");
+    assert_eq!(out.status.code(), Some(1), "hirad {args:?}: exit status");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(!err.contains("panicked"), "hirad {args:?} panicked:\n{err}");
+    err
+}
+
+fn fixtures() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "hir"))
+        .collect();
+    v.sort();
+    assert!(v.len() >= 7, "expected the fixtures in {}", dir.display());
+    v
+}
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures").join(name)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The `polygons N` line of `hirad info`.
+fn polygons(info: &str) -> u64 {
+    let line = info.lines().find(|l| l.starts_with("polygons")).expect("a polygons line");
+    line.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+fn faces(obj: &Path) -> u64 {
+    std::fs::read_to_string(obj).unwrap().lines().filter(|l| l.starts_with("f ")).count() as u64
+}
+
+/// Entries of a directory (to check that nothing, temporary files included, was left).
+fn entries(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn help_on_every_command() {
+    for cmd in [&["--help"][..], &["info", "--help"], &["convert", "--help"], &["flatten", "--help"]] {
+        let out = ok(cmd);
+        assert!(out.contains("Usage"), "{out}");
+    }
+}
+
+#[test]
+fn info_and_flatten_on_every_fixture() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in fixtures() {
+        let info = ok(&["info", s(&f)]);
+        let n = polygons(&info);
+        assert!(n > 0, "{}: {info}", f.display());
+        let out = dir.path().join(f.file_stem().unwrap()).with_extension("obj");
+        ok(&["flatten", "-q", s(&f), "-o", s(&out)]);
+        assert_eq!(faces(&out), n, "{}: faces in the flattened OBJ", f.display());
+        assert!(out.with_extension("mtl").exists());
+        // The flattened OBJ reads back with the same polygon count.
+        assert_eq!(polygons(&ok(&["info", "-q", s(&out)])), n, "{}", f.display());
+    }
+}
+
+#[test]
+fn chair_room_flattens_to_24_chairs_plus_the_room() {
+    let path = fixture("chair_room.hir");
+    let scene = hirad::text::parse(&std::fs::read(&path).unwrap()).unwrap();
+    fn own(c: &hirad::scene::Cluster) -> u64 {
+        if c.instance.is_some() {
+            return 0;
+        }
+        c.polygons.len() as u64 + c.children.iter().map(own).sum::<u64>()
+    }
+    fn instances(c: &hirad::scene::Cluster) -> u64 {
+        c.instance.is_some() as u64 + c.children.iter().map(instances).sum::<u64>()
+    }
+    let chair = scene.original_index("chair").expect("an original named chair");
+    let chair_polys = own(&scene.originals[chair].root);
+    assert_eq!(instances(&scene.root), 24);
+    let expected = own(&scene.root) + 24 * chair_polys;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("room.obj");
+    ok(&["flatten", "-q", s(&path), "-o", s(&out)]);
+    assert_eq!(faces(&out), expected);
+    assert_eq!(polygons(&ok(&["info", s(&path)])), expected);
+}
+
+#[test]
+fn convert_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in fixtures() {
+        let stem = f.file_stem().unwrap().to_str().unwrap();
+        let b1 = dir.path().join(format!("{stem}.hirb"));
+        let t2 = dir.path().join(format!("{stem}.2.hir"));
+        let b2 = dir.path().join(format!("{stem}.2.hirb"));
+        ok(&["convert", "-q", s(&f), "-o", s(&b1)]);
+        ok(&["convert", "-q", s(&b1), "-o", s(&t2)]);
+        ok(&["convert", "-q", s(&t2), "-o", s(&b2)]);
+        assert_eq!(std::fs::read(&b1).unwrap(), std::fs::read(&b2).unwrap(), "{stem}: hir -> hirb -> hir -> hirb");
+        // info agrees whatever the format.
+        let a = ok(&["info", "--json", s(&f)]);
+        let b = ok(&["info", "--json", s(&b1)]);
+        let strip = |j: &str| j.split(",\"format\"").nth(1).unwrap().split(",\"bands\"").nth(1).unwrap().to_string();
+        assert_eq!(strip(&a), strip(&b), "{stem}");
+    }
+}
+
+#[test]
+fn located_errors_and_nothing_left_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Text: an unknown material on line 4.
+    let bad = d.join("bad.hir");
+    std::fs::write(&bad, "hirad 1\nbands 1\nscene {\n  tri nope 0 0 0 1 0 0 0 1 0\n}\n").unwrap();
+    let err = fails(&["info", s(&bad)]);
+    assert!(err.contains(&format!("{}:4:", bad.display())), "{err}");
+    let out = d.join("out.obj");
+    fails(&["flatten", s(&bad), "-o", s(&out)]);
+    fails(&["convert", s(&bad), "-o", s(&d.join("out.hirb"))]);
+    // Binary: a valid image with one corrupted vertex coordinate.
+    let good = d.join("good.hirb");
+    ok(&["convert", "-q", s(&fixture("parallel_squares.hir")), "-o", s(&good)]);
+    let mut bytes = std::fs::read(&good).unwrap();
+    let header = *hirad::scene::read_image(&bytes).unwrap().header();
+    let at = header.section(hirad_core::image::Section::Vertices).offset as usize;
+    bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let corrupt = d.join("corrupt.hirb");
+    std::fs::write(&corrupt, &bytes).unwrap();
+    let err = fails(&["info", s(&corrupt)]);
+    assert!(err.contains(&format!("{}: byte {at}: vertex 0", corrupt.display())), "{err}");
+    // Truncated binary.
+    std::fs::write(&corrupt, &bytes[..bytes.len() / 2]).unwrap();
+    let err = fails(&["flatten", s(&corrupt), "-o", s(&out)]);
+    assert!(err.contains("byte"), "{err}");
+    // OBJ: a face index out of range on line 3, column 7.
+    let obj = d.join("bad.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let err = fails(&["info", s(&obj)]);
+    assert!(err.contains(&format!("{}:3:7:", obj.display())), "{err}");
+    // Missing files and unknown formats.
+    let err = fails(&["info", s(&d.join("missing.hir"))]);
+    assert!(err.contains("missing.hir"), "{err}");
+    let err = fails(&["info", s(&d.join("scene.txt"))]);
+    assert!(err.contains("unknown scene format"), "{err}");
+    let err = fails(&["flatten", s(&fixture("furnace.hir")), "-o", s(&d.join("x.hir"))]);
+    assert!(err.contains(".obj"), "{err}");
+    // Nothing half-written: only the inputs remain.
+    assert_eq!(entries(d), ["bad.hir", "bad.obj", "corrupt.hirb", "good.hirb"]);
+}
