@@ -1,8 +1,48 @@
 //! Wavefront OBJ + MTL: import into the scene model, and export of the expanded scene.
+//!
+//! # Import
+//! The input is untrusted: every fault is an [`ObjError`] located by file, line and column
+//! (1-based, in characters), and nothing is allocated from a size the file claims.
+//!
+//! * Statements: `v x y z [w ...]`, `vt` and `vn` (counted; their indices in faces are
+//!   checked), `f` (`v`, `v/vt`, `v//vn`, `v/vt/vn`, negative indices count back from the
+//!   last element), `o`, `g`, `usemtl`, `mtllib`. `s` is ignored; `l`, `p`, free-form
+//!   geometry and unknown statements are ignored with one warning per kind.
+//! * Faces keep their file order. Triangles stay triangles, accepted quads stay quads, other
+//!   faces are split (see `split.rs`); a corner repeated at once (`f 1 2 3 3`) is dropped.
+//!   Degenerate faces and parts are skipped with a warning.
+//! * Clusters: faces before any `o`/`g` belong to the unnamed root; `o` starts a child of the
+//!   root, `g` a child of the current `o` (or of the root); a bare `g` is the group `default`.
+//!   Each cluster holds the vertices its faces use; clusters without faces are dropped.
+//! * Materials: 3 bands (R, G, B). `Kd` is the front reflectance, `Ke` the emitted exitance
+//!   (W/m^2), `Tf` the diffuse transmittance of a two-sided material whose back reflectance
+//!   is `Kd`. Faces before any `usemtl` use [`DEFAULT_MATERIAL`] (reflectance 0.5).
+//!
+//! # Export
+//! The expansion of the scene is streamed: never held in memory. Face k (1-based) is the
+//! polygon of global id k-1.
+
+mod clusters;
+mod diag;
+mod export;
+mod face;
+mod lex;
+mod materials;
+mod mtl;
+mod mtl_write;
+mod number;
+mod reader;
+mod split;
+mod vec64;
+
+pub use diag::MAX_WARNINGS;
+pub use materials::DEFAULT_MATERIAL;
+pub use split::MAX_CLIPPED_CORNERS;
 
 use crate::scene::Scene;
 use std::fmt;
 use std::io::{self, Write};
+use std::path::Path;
 
 /// An import error located in the OBJ file or in one of its MTL files.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -39,8 +79,28 @@ impl std::error::Error for ObjError {}
 pub struct ObjImport {
     /// The scene.
     pub scene: Scene,
-    /// Human-readable notes ("12:1: degenerate face skipped"), in file order.
+    /// Human-readable notes ("12:1: degenerate face skipped"), in file order; at most
+    /// [`MAX_WARNINGS`] and a last line counting the others.
     pub warnings: Vec<String>,
+    /// What the file held.
+    pub counts: ObjCounts,
+}
+
+/// Element counts of an imported OBJ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ObjCounts {
+    /// `v` statements.
+    pub vertices: u64,
+    /// `vt` statements (not used).
+    pub texture_coords: u64,
+    /// `vn` statements (not used).
+    pub normals: u64,
+    /// `f` statements.
+    pub faces: u64,
+    /// Polygons of the scene (faces after splitting, without the skipped ones).
+    pub polygons: u64,
+    /// Faces skipped as degenerate.
+    pub skipped_faces: u64,
 }
 
 /// Imports an OBJ. `load_mtl` returns the bytes of an MTL file named in `mtllib` (resolved
@@ -49,13 +109,29 @@ pub fn import(
     obj: &[u8],
     load_mtl: &mut dyn FnMut(&str) -> Result<Vec<u8>, String>,
 ) -> Result<ObjImport, ObjError> {
-    let _ = (obj, load_mtl);
-    Err(ObjError {
-        file: String::new(),
-        line: 1,
-        column: 1,
-        message: "the OBJ importer is not written yet".into(),
-    })
+    reader::read(obj, load_mtl)
+}
+
+/// A `load_mtl` for [`import`] that reads MTL files from `dir` (the OBJ's folder). A name
+/// that cannot be read there as written (an absolute path from another machine, say) is tried
+/// once more by its last component, split at `/` or `\\`.
+pub fn load_mtl_from(dir: &Path) -> impl FnMut(&str) -> Result<Vec<u8>, String> + '_ {
+    move |name: &str| {
+        let first = dir.join(name);
+        match std::fs::read(&first) {
+            Ok(bytes) => Ok(bytes),
+            Err(e) => {
+                let base = name.rsplit(['/', '\\']).next().unwrap_or(name);
+                if base != name
+                    && !base.is_empty()
+                    && let Ok(bytes) = std::fs::read(dir.join(base))
+                {
+                    return Ok(bytes);
+                }
+                Err(format!("{}: {e}", first.display()))
+            }
+        }
+    }
 }
 
 /// What an export wrote.
@@ -70,13 +146,16 @@ pub struct ObjExport {
 }
 
 /// Writes the expanded scene as OBJ (faces in global-id order) and its materials as MTL;
-/// the OBJ names the MTL as `mtl_name` in its `mtllib` line.
+/// the OBJ names the MTL as `mtl_name` in its `mtllib` line. Buffers internally; a scene
+/// that fails its check, or an `mtl_name` an OBJ line cannot hold, is `InvalidInput`.
 pub fn export(
     scene: &Scene,
     mtl_name: &str,
     obj: &mut dyn Write,
     mtl: &mut dyn Write,
 ) -> io::Result<ObjExport> {
-    let _ = (scene, mtl_name, obj, mtl);
-    Err(io::Error::other("the OBJ exporter is not written yet"))
+    export::export(scene, mtl_name, obj, mtl)
 }
+
+#[cfg(test)]
+mod tests;

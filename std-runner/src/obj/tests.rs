@@ -1,0 +1,1 @@
+//! Unit tests of the OBJ/MTL reader and writer.
