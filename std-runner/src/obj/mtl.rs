@@ -199,11 +199,11 @@ fn read_colour(line: &Line, file: &str, warnings: &mut Warnings) -> Result<Colou
     Ok(c)
 }
 
-/// `Tf 1 1 1` is what Maya and 3ds Max write to mean "no transmission filter" on opaque
-/// materials; with a non-black `Kd` it would create energy, so it is read as "no Tf".
+/// `Tf 1 1 1` is what Maya and 3ds Max write for every material, meaning "no transmission
+/// filter" for an opaque surface. As a transmittance it would make the surface invisible (and
+/// with any `Kd` create energy), so it is read as "no Tf".
 fn is_filter_placeholder(p: &Pending) -> bool {
-    let reflects = p.kd.is_none_or(|kd| kd.values.iter().any(|&v| v != 0.0));
-    p.tf.is_some_and(|tf| tf.values == [1.0; 3]) && reflects
+    p.tf.is_some_and(|tf| tf.values == [1.0; 3])
 }
 
 /// The material data of `p` as far as it is known.
@@ -269,14 +269,12 @@ fn finish(p: Pending, file: &str, warnings: &mut Warnings) -> MtlMaterial {
     if let Some(tf) = p.tf
         && is_filter_placeholder(&p)
     {
-        warnings.add(
+        warnings.once(
             file,
+            "Tf 1 1 1",
             tf.at[0],
-            format!(
-                "material '{}': Tf 1 1 1 with a non-black Kd read as a transparency filter \
-                 and ignored (the material is opaque)",
-                p.name
-            ),
+            "Tf 1 1 1 (what Maya and 3ds Max write for opaque materials) ignored: the \
+             materials that have it are opaque",
         );
     }
     MtlMaterial {

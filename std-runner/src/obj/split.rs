@@ -1,10 +1,12 @@
 //! Splits an OBJ face into the triangles and quads the scene model accepts.
 //!
-//! Triangles stay triangles and quads stay quads when [`polygon_shape`] accepts them. A refused
-//! quad is cut along the diagonal that gives two valid triangles. Larger polygons are fanned
-//! from their first corner when convex and planar, otherwise ear-clipped in the plane of their
-//! Newell normal. Every piece returned passes [`polygon_shape`] and faces the same side as
-//! the face; pieces that would not are dropped and counted. Tolerances are relative to the
+//! Triangles stay triangles and quads stay quads when [`polygon_shape`] accepts them. Other
+//! faces lose their corners on straight edges first (a rectangle with extra corners along its
+//! sides is a quad). A refused quad is cut along the diagonal that gives two valid triangles.
+//! Larger polygons are fanned from their first corner when convex and planar, otherwise
+//! ear-clipped in the plane of their Newell normal. Every piece returned passes
+//! [`polygon_shape`] and faces the same side as the face; pieces that would not are dropped
+//! and counted. Tolerances are relative to the
 //! polygon's own size (the core's [`DEGENERATE_REL`] and [`PLANAR_REL`]).
 
 use super::vec64::{D2, D3};
@@ -53,7 +55,10 @@ pub(crate) fn split(pts: &[Vec3], out: &mut Vec<Piece>) -> Result<usize, TooMany
             }
             Ok(0)
         }
-        4 => Ok(split_quad(pts, out)),
+        4 if polygon_shape(pts).is_ok() => {
+            out.push(Piece::Quad([0, 1, 2, 3]));
+            Ok(0)
+        }
         _ => split_polygon(pts, out),
     }
 }
@@ -94,68 +99,106 @@ fn face_normal(pts: &[D3]) -> Option<D3> {
     Some(n / len)
 }
 
-fn split_quad(pts: &[Vec3], out: &mut Vec<Piece>) -> usize {
-    if polygon_shape(pts).is_ok() {
-        out.push(Piece::Quad([0, 1, 2, 3]));
-        return 0;
-    }
-    let d: Vec<D3> = pts.iter().map(|p| D3::from_vec3(*p)).collect();
-    let Some(n) = face_normal(&d) else {
-        return 0;
-    };
-    let diagonals = [[[0, 1, 2], [0, 2, 3]], [[0, 1, 3], [1, 2, 3]]];
-    let mut best: &[[usize; 3]; 2] = &diagonals[0];
-    let mut best_count = 0;
-    for pair in &diagonals {
-        let count = pair.iter().filter(|t| valid_tri(pts, **t, n)).count();
-        if count > best_count {
-            best = pair;
-            best_count = count;
-        }
-    }
-    for t in best {
-        if valid_tri(pts, *t, n) {
-            out.push(Piece::Tri(*t));
-        }
-    }
-    if best_count == 0 { 0 } else { 2 - best_count }
-}
-
+/// A refused quad or a larger polygon. Corners on straight edges are dropped first (they add
+/// no area; the solver's polygons are independent, so the T-junction left behind is
+/// harmless); what remains is a triangle, a quad, or fanned / ear-clipped.
 fn split_polygon(pts: &[Vec3], out: &mut Vec<Piece>) -> Result<usize, TooManyCorners> {
     let d: Vec<D3> = pts.iter().map(|p| D3::from_vec3(*p)).collect();
     let Some(n) = face_normal(&d) else {
         return Ok(0);
     };
     let flat = project(&d, n);
+    let keep = drop_straight(&flat);
     let mut skipped = 0;
-    if is_planar(&d, n) && is_convex(&flat) {
-        for i in 1..pts.len() - 1 {
-            let t = [0, i, i + 1];
-            if valid_tri(pts, t, n) {
-                out.push(Piece::Tri(t));
-            } else {
-                skipped += 1;
-            }
-        }
-        return Ok(finish(out, skipped));
-    }
-    if pts.len() > MAX_CLIPPED_CORNERS {
-        return Err(TooManyCorners);
-    }
     let mut emit = |t: [usize; 3]| {
+        let t = t.map(|k| keep[k]);
         if valid_tri(pts, t, n) {
             out.push(Piece::Tri(t));
         } else {
             skipped += 1;
         }
     };
-    let gave_up = ear_clip(&flat, &mut emit);
-    Ok(finish(out, skipped + usize::from(gave_up)))
+    match keep.len() {
+        0..=2 => {}
+        3 => emit([0, 1, 2]),
+        4 => {
+            let q = [keep[0], keep[1], keep[2], keep[3]];
+            if polygon_shape(&q.map(|k| pts[k])).is_ok() {
+                out.push(Piece::Quad(q));
+            } else {
+                split_quad(&keep, pts, n, &mut emit);
+            }
+        }
+        m => {
+            let kept: Vec<D2> = keep.iter().map(|&k| flat[k]).collect();
+            let kept3: Vec<D3> = keep.iter().map(|&k| d[k]).collect();
+            if is_planar(&kept3, n) && is_convex(&kept) {
+                for i in 1..m - 1 {
+                    emit([0, i, i + 1]);
+                }
+            } else if m > MAX_CLIPPED_CORNERS {
+                return Err(TooManyCorners);
+            } else if ear_clip(&kept, &mut emit) {
+                skipped += 1;
+            }
+        }
+    }
+    // A face of which no piece survives is degenerate as a whole, not in parts.
+    Ok(if out.is_empty() { 0 } else { skipped })
 }
 
-/// A face of which no piece survives is degenerate as a whole, not in parts.
-fn finish(out: &[Piece], skipped: usize) -> usize {
-    if out.is_empty() { 0 } else { skipped }
+/// Cuts the quad `keep` (corner positions of `pts`) along the diagonal that gives more valid
+/// triangles, 0-2 on a tie; `emit` takes triangles of positions in `keep`.
+fn split_quad(keep: &[usize], pts: &[Vec3], n: D3, emit: &mut dyn FnMut([usize; 3])) {
+    let diagonals = [[[0, 1, 2], [0, 2, 3]], [[0, 1, 3], [1, 2, 3]]];
+    let valid = |t: [usize; 3]| valid_tri(pts, t.map(|k| keep[k]), n);
+    let count = |pair: &[[usize; 3]; 2]| pair.iter().filter(|t| valid(**t)).count();
+    let best = if count(&diagonals[1]) > count(&diagonals[0]) {
+        &diagonals[1]
+    } else {
+        &diagonals[0]
+    };
+    for t in best {
+        emit(*t);
+    }
+}
+
+/// Positions of the corners that are not on a straight edge (or repeated in place), in
+/// order. A corner is dropped when the triangle it makes with its current neighbours has no
+/// area by the core's rule and the outline goes on forward through it; checking against the
+/// current neighbours means a finely curved outline is never flattened beyond that rule.
+fn drop_straight(p: &[D2]) -> Vec<usize> {
+    let straight = |a: D2, b: D2, c: D2| {
+        a == b || b == c || {
+            let area = cross(a, b, c);
+            area.abs() <= area_tol(a, b, c) && (b - a).dot(c - b) > 0.0
+        }
+    };
+    let mut keep: Vec<usize> = Vec::with_capacity(p.len());
+    for k in 0..p.len() {
+        while keep.len() >= 2 && straight(p[keep[keep.len() - 2]], p[keep[keep.len() - 1]], p[k]) {
+            keep.pop();
+        }
+        keep.push(k);
+    }
+    // Around the seam: the last corners against the first, then the first against the last.
+    let mut first = 0;
+    loop {
+        let m = keep.len() - first;
+        if m < 3 {
+            return Vec::new();
+        }
+        let last = keep.len() - 1;
+        if straight(p[keep[last - 1]], p[keep[last]], p[keep[first]]) {
+            keep.pop();
+        } else if straight(p[keep[last]], p[keep[first]], p[keep[first + 1]]) {
+            first += 1;
+        } else {
+            break;
+        }
+    }
+    keep.drain(..first);
+    keep
 }
 
 /// Coordinates in the plane through the centroid perpendicular to `n`, in a right-handed
