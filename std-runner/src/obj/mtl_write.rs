@@ -131,7 +131,15 @@ pub(crate) fn write_mtl(
             write_colour(out, "Ke", rgb(&d.emit_front, scene.bands))?;
         }
         if d.two_sided {
-            write_colour(out, "Tf", rgb(&d.tau, scene.bands))?;
+            let tau = rgb(&d.tau, scene.bands);
+            write_colour(out, "Tf", tau)?;
+            if tau == [1.0; 3] {
+                warnings.push(format!(
+                    "material '{}': Tf 1 1 1 is read back (by hirad too) as the 'no filter' \
+                     value Maya and 3ds Max write for opaque materials",
+                    m.name
+                ));
+            }
             let n = usize::from(scene.bands).min(MAX_BANDS);
             if d.rho_back[..n] != d.rho_front[..n] {
                 warnings.push(format!(
