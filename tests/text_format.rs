@@ -541,3 +541,26 @@ const SOUP: [&str; 58] = [
     "@",
     "é",
 ];
+
+#[test]
+fn the_example_in_the_specification_is_valid() {
+    let spec = std::fs::read_to_string(fixture("../docs/format.md")).unwrap();
+    let examples: Vec<&str> = spec
+        .split("```hir\n")
+        .skip(1)
+        .filter_map(|s| s.split("\n```").next())
+        .collect();
+    assert_eq!(examples.len(), 2, "the first look and the complete example");
+    for text in &examples {
+        let s = parse(text.as_bytes()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        compile(&s).unwrap();
+    }
+    // The complete example's stated numbers.
+    let info = *read_image(&compile(&parse(examples[1].as_bytes()).unwrap()).unwrap())
+        .unwrap()
+        .info();
+    assert_eq!(info.expanded_polygons, 8);
+    assert_eq!(info.instancing_depth, 1);
+    assert_eq!(info.exact_instances, 2);
+    assert_eq!(info.approximate_instances, 1);
+}
