@@ -4,7 +4,7 @@
 use super::TextError;
 use super::lexer::{Pos, Tok};
 use super::parser::Parser;
-use super::units::{unit_direction, unit_quat};
+use super::units::{normalised_direction, unit_quat};
 use crate::scene::{Cluster, Similarity};
 use glam::{Quat, Vec3};
 use hirad_core::limits::NONE;
@@ -111,7 +111,7 @@ impl Parser<'_> {
                 }
                 "rotate" => {
                     let v = self.vec4("rotate", at, "(axis x y z, then the angle in degrees)")?;
-                    let Some(axis) = unit_direction(v.truncate()) else {
+                    let Some(axis) = normalised_direction(v.truncate()) else {
                         return Err(at.error("the rotation axis must not be zero"));
                     };
                     placement.rotate(Quat::from_axis_angle(axis, v.w.to_radians()));

@@ -84,7 +84,11 @@ fn position_of(text: &str, offset: usize) -> Pos {
     let before = text.get(..offset).unwrap_or(text);
     let line = before.bytes().filter(|&b| b == b'\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = before.get(line_start..).map_or(0, |l| l.chars().count()) + 1;
+    let mut column = before.get(line_start..).map_or(0, |l| l.chars().count()) + 1;
+    if line_start == 0 && before.starts_with('\u{feff}') {
+        // The byte-order mark takes no column (see `Lexer::new`).
+        column -= 1;
+    }
     Pos {
         line: saturate(line),
         column: saturate(column),
@@ -125,16 +129,17 @@ impl<'a> Lexer<'a> {
                     .error("the file is not valid UTF-8 (invalid byte sequence here)"));
             }
         };
-        // A byte-order mark some editors write is skipped (it still counts as a column).
-        let mut lexer = Lexer {
-            src: text,
-            at: 0,
-            pos: Pos::START,
+        // A byte-order mark some editors write is skipped and takes no column.
+        let at = if text.starts_with('\u{feff}') {
+            '\u{feff}'.len_utf8()
+        } else {
+            0
         };
-        if text.starts_with('\u{feff}') {
-            lexer.bump();
-        }
-        Ok(lexer)
+        Ok(Lexer {
+            src: text,
+            at,
+            pos: Pos::START,
+        })
     }
 
     fn peek_char(&self) -> Option<char> {

@@ -55,7 +55,7 @@ pub(crate) struct Parser<'a> {
     scene_seen: Option<Pos>,
 }
 
-/// The first statement's keyword and the only version this reader knows.
+/// The only format version this reader knows (`hirad 1`).
 const VERSION: u32 = 1;
 
 impl<'a> Parser<'a> {

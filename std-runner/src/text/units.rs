@@ -26,6 +26,12 @@ pub(crate) fn unit_direction(v: Vec3) -> Option<Vec3> {
     normalised(v.extend(0.0)).map(Vec4::truncate)
 }
 
+/// A direction scaled to unit length (never kept as written), or `None` if it is zero: for
+/// rotation axes, whose exact bits are never printed back.
+pub(crate) fn normalised_direction(v: Vec3) -> Option<Vec3> {
+    normalised(v.extend(0.0)).map(Vec4::truncate)
+}
+
 /// A rotation: kept if already unit within tolerance, else normalised; `None` if zero.
 pub(crate) fn unit_quat(q: Quat) -> Option<Quat> {
     if (q.length_squared() - 1.0).abs() <= UNIT_TOLERANCE {

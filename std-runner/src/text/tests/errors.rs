@@ -235,6 +235,9 @@ fn bad_utf8() {
         "not valid UTF-8",
     );
     fails_at(b"\xff".as_slice(), 1, 1, "UTF-8");
+    // A byte-order mark takes no column.
+    fails_at("\u{feff}hirad 2", 1, 7, "version 2");
+    fails_at(b"\xef\xbb\xbfhi\xff".as_slice(), 1, 3, "UTF-8");
 }
 
 #[test]
