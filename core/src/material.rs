@@ -56,6 +56,11 @@ pub enum MaterialError {
         /// Band index.
         band: u8,
     },
+    /// A value the material does not use is not zero: a band past `bands`, or a back-side
+    /// value of a one-sided material. (Zeros keep one material one value.)
+    Unused,
+    /// The band count is outside 1..=8.
+    Bands,
 }
 
 impl core::fmt::Display for MaterialError {
@@ -79,6 +84,10 @@ impl core::fmt::Display for MaterialError {
             MaterialError::Emission { band } => {
                 write!(f, "band {band}: emitted exitance must be >= 0")
             }
+            MaterialError::Unused => f.write_str(
+                "values past the band count, or back-side values of a one-sided material, must be 0",
+            ),
+            MaterialError::Bands => write!(f, "band count must lie in 1..={MAX_BANDS}"),
         }
     }
 }
@@ -107,7 +116,23 @@ impl MaterialData {
 
     /// Checks the physical ranges of every used band.
     pub fn check(&self) -> Result<(), MaterialError> {
-        for b in 0..self.bands as usize {
+        let n = self.bands as usize;
+        if n == 0 || n > MAX_BANDS {
+            return Err(MaterialError::Bands);
+        }
+        let unused_front = self.rho_front[n..].iter().chain(&self.emit_front[n..]);
+        let unused_back = if self.two_sided {
+            [&self.rho_back[n..], &self.tau[n..], &self.emit_back[n..]]
+        } else {
+            [&self.rho_back[..], &self.tau[..], &self.emit_back[..]]
+        };
+        if unused_front
+            .chain(unused_back.into_iter().flatten())
+            .any(|v| v.to_bits() != 0)
+        {
+            return Err(MaterialError::Unused);
+        }
+        for b in 0..n {
             let band = b as u8;
             let vals = [
                 self.rho_front[b],
@@ -207,5 +232,16 @@ mod tests {
         m.tau[1] = 0.0;
         m.emit_front[0] = -1.0;
         assert_eq!(m.check(), Err(MaterialError::Emission { band: 0 }));
+        m.emit_front[0] = 0.0;
+        m.tau[2] = 0.5;
+        assert_eq!(m.check(), Err(MaterialError::Unused));
+        m.tau[2] = 0.0;
+        m.two_sided = false;
+        assert_eq!(m.check(), Err(MaterialError::Unused));
+        m.rho_back = [0.0; MAX_BANDS];
+        m.tau = [0.0; MAX_BANDS];
+        assert_eq!(m.check(), Ok(()));
+        m.rho_back[0] = -0.0;
+        assert_eq!(m.check(), Err(MaterialError::Unused));
     }
 }

@@ -9,4 +9,4 @@ mod transform;
 pub use aabb::Aabb;
 pub use camera::camera_ok;
 pub use polygon::{DEGENERATE_REL, PLANAR_REL, PolygonShape, ShapeError, polygon_shape};
-pub use transform::{Similarity, TransformError};
+pub use transform::{Similarity, TransformError, UNIT_TOLERANCE};

@@ -27,6 +27,8 @@ pub struct PolygonShape {
 pub enum ShapeError {
     /// A corner coordinate is NaN or infinite.
     NonFinite,
+    /// Finite corners, but so far apart that edges or area overflow f32.
+    TooLarge,
     /// Zero (or vanishing) area: repeated or collinear corners.
     Degenerate,
     /// A quad whose corners do not lie in one plane.
@@ -39,6 +41,9 @@ impl core::fmt::Display for ShapeError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
             ShapeError::NonFinite => "a corner is not a finite number",
+            ShapeError::TooLarge => {
+                "the polygon is too large to measure in f32 (rescale the scene)"
+            }
             ShapeError::Degenerate => "the polygon has no area (repeated or collinear corners)",
             ShapeError::NonPlanar => "the quad is not planar; split it into two triangles",
             ShapeError::NonConvex => "the quad is not strictly convex; split it into two triangles",
@@ -53,11 +58,40 @@ pub fn polygon_shape(corners: &[Vec3]) -> Result<PolygonShape, ShapeError> {
     if corners.iter().any(|c| !c.is_finite()) {
         return Err(ShapeError::NonFinite);
     }
-    match corners.len() {
-        3 => triangle(corners[0], corners[1], corners[2]),
-        4 => quad(corners[0], corners[1], corners[2], corners[3]),
-        _ => Err(ShapeError::Degenerate),
+    let n = corners.len();
+    if n != 3 && n != 4 {
+        return Err(ShapeError::Degenerate);
     }
+    // Measure relative to the first corner, scaled by a power of two (exact) so that edges
+    // lie within [-2, 2]: huge and tiny polygons are judged like unit ones.
+    let mut d = [Vec3::ZERO; 4];
+    let mut m = 0.0f32;
+    for (di, c) in d.iter_mut().zip(corners) {
+        *di = *c - corners[0];
+        if !di.is_finite() {
+            return Err(ShapeError::TooLarge);
+        }
+        m = m.max(di.abs().max_element());
+    }
+    let s = f32::from_bits(m.to_bits() & 0x7F80_0000);
+    if s == 0.0 {
+        return Err(ShapeError::Degenerate);
+    }
+    for di in d.iter_mut() {
+        *di /= s;
+    }
+    let shape = match n {
+        3 => triangle(d[0], d[1], d[2]),
+        _ => quad(d[0], d[1], d[2], d[3]),
+    }?;
+    let area = shape.area * s * s;
+    if !area.is_finite() {
+        return Err(ShapeError::TooLarge);
+    }
+    Ok(PolygonShape {
+        area,
+        normal: shape.normal,
+    })
 }
 
 fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Result<PolygonShape, ShapeError> {
@@ -156,6 +190,16 @@ mod tests {
         let nan = [v(f32::NAN, 0., 0.), v(1., 0., 0.), v(0., 1., 0.)];
         assert_eq!(polygon_shape(&nan), Err(ShapeError::NonFinite));
         let huge = [v(-3e38, 0., 0.), v(3e38, 0., 0.), v(0., 3e38, 0.)];
-        assert_eq!(polygon_shape(&huge), Err(ShapeError::NonFinite));
+        assert_eq!(polygon_shape(&huge), Err(ShapeError::TooLarge));
+        let big = [v(0., 0., 0.), v(1e19, 0., 0.), v(0., 1e19, 0.)];
+        assert_eq!(polygon_shape(&big).unwrap().area, 0.5e38);
+        let tiny = [v(0., 0., 0.), v(1e-19, 0., 0.), v(0., 1e-19, 0.)];
+        assert!((polygon_shape(&tiny).unwrap().area / 0.5e-38 - 1.0).abs() < 1e-5);
+        let far = [
+            v(1e6, 1e6, 0.),
+            v(1e6 + 1.0, 1e6, 0.),
+            v(1e6, 1e6 + 1.0, 0.),
+        ];
+        assert_eq!(polygon_shape(&far).unwrap().area, 0.5);
     }
 }

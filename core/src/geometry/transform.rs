@@ -35,8 +35,9 @@ impl core::fmt::Display for TransformError {
     }
 }
 
-/// How far from 1 the squared length of a stored rotation quaternion may be.
-const UNIT_TOLERANCE: f32 = 1e-5;
+/// How far from 1 the squared length of a stored unit vector or rotation quaternion may be.
+/// Every loader uses this one value, so a value accepted anywhere is accepted everywhere.
+pub const UNIT_TOLERANCE: f32 = 1e-5;
 
 impl Similarity {
     /// The identity.

@@ -12,7 +12,7 @@ use super::records::*;
 use super::source::SceneSource;
 use super::view::{SceneInfo, SceneView, read_records};
 use crate::NodeId;
-use crate::geometry::{Aabb, Similarity, camera_ok, polygon_shape};
+use crate::geometry::{Aabb, Similarity, UNIT_TOLERANCE, camera_ok, polygon_shape};
 use crate::limits::{MAX_BANDS, MAX_INSTANCING_DEPTH, MAX_NAME_BYTES, MAX_NODE_DEPTH, NONE};
 use crate::material::{MaterialData, TWO_SIDED};
 use bytemuck::Pod;
@@ -732,7 +732,11 @@ fn finish<S: SceneSource>(src: &S, h: &Header, f: &Frame) -> Result<(Summary, bo
     if computed.expanded != f.stored_expanded {
         return Err(ImageError::at(at + 24, K::Expanded { node }));
     }
-    if !f.stored_bbox.is_finite_nonempty() || !f.stored_bbox.contains(&computed.bbox) {
+    // The content's box is either empty or finite: a transform that overflows f32 is refused
+    // here (a NaN box would otherwise count as empty and be "contained").
+    let content_ok = computed.bbox == Aabb::EMPTY || computed.bbox.is_finite_nonempty();
+    if !content_ok || !f.stored_bbox.is_finite_nonempty() || !f.stored_bbox.contains(&computed.bbox)
+    {
         return Err(ImageError::at(at, K::Bbox { node }));
     }
     let contributes = !computed.bbox.is_empty();
@@ -752,7 +756,7 @@ fn check_lights<S: SceneSource>(src: &S, h: &Header, s: Section) -> Result<(), I
         let l = w.get(src, h, i)?;
         let light = i as u32;
         let d = Vec3::from(l.towards);
-        if !d.is_finite() || (d.length_squared() - 1.0).abs() > 1e-5 {
+        if !d.is_finite() || (d.length_squared() - 1.0).abs() > UNIT_TOLERANCE {
             return err(h, s, i, K::LightDirection { light });
         }
         if l.values as u64 + h.bands as u64 > pool {

@@ -2,7 +2,7 @@
 //! the fault is. Every physical and geometric rule is the core's own.
 
 use super::{Cluster, Scene};
-use hirad_core::geometry::{camera_ok, polygon_shape};
+use hirad_core::geometry::{Aabb, Similarity, UNIT_TOLERANCE, camera_ok, polygon_shape};
 use hirad_core::limits::{MAX_BANDS, MAX_INSTANCING_DEPTH, MAX_NAME_BYTES, MAX_NODE_DEPTH, NONE};
 use std::fmt;
 
@@ -57,11 +57,27 @@ pub(crate) fn cluster_label(c: &Cluster, index: usize) -> String {
     }
 }
 
-/// What a checked tree stands for.
-#[derive(Clone, Copy, Debug, Default)]
+/// What a checked tree stands for: the same derived values the image stores (see
+/// `compile`), so that every scene `check` accepts compiles.
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct TreeSummary {
     pub expanded: u64,
     pub depth: u32,
+    /// The box the image stores for this node (in its parent's frame).
+    pub bbox: Aabb,
+    /// False when the node's content is empty (its box then counts for nothing).
+    pub contributes: bool,
+}
+
+impl Default for TreeSummary {
+    fn default() -> Self {
+        TreeSummary {
+            expanded: 0,
+            depth: 0,
+            bbox: Aabb::EMPTY,
+            contributes: false,
+        }
+    }
 }
 
 impl Scene {
@@ -119,12 +135,20 @@ impl Scene {
         for (kind, lights) in [("sun", &self.suns), ("sky direction", &self.sky)] {
             for (i, l) in lights.iter().enumerate() {
                 let path = format!("{kind} {i}");
-                if !l.towards.is_finite() || (l.towards.length_squared() - 1.0).abs() > 1e-5 {
+                if !l.towards.is_finite()
+                    || (l.towards.length_squared() - 1.0).abs() > UNIT_TOLERANCE
+                {
                     return fail(&path, "direction must be a unit vector");
                 }
                 let irr = &l.irradiance[..self.bands as usize];
                 if irr.iter().any(|v| !v.is_finite() || *v < 0.0) {
                     return fail(&path, "irradiance must be finite and >= 0");
+                }
+                if l.irradiance[self.bands as usize..]
+                    .iter()
+                    .any(|v| v.to_bits() != 0)
+                {
+                    return fail(&path, "irradiance values past the band count must be 0");
                 }
             }
         }
@@ -220,55 +244,94 @@ impl Scene {
                 return fail(&ppath, e.to_string());
             }
         }
-        let mut sum = TreeSummary {
+        let mut own = Aabb::EMPTY;
+        for v in &c.vertices {
+            own.include(*v);
+        }
+        let mut acc = TreeSummary {
             expanded: c.polygons.len() as u64,
             depth: 0,
+            bbox: own,
+            contributes: false,
         };
         for (i, child) in c.children.iter().enumerate() {
             let cpath = format!("{path} > {}", cluster_label(child, i));
             let s = self.check_node(&cpath, child, depth + 1, done)?;
-            sum.expanded = sum
-                .expanded
-                .checked_add(s.expanded)
-                .map_or_else(|| fail(path, "expands to more than 2^64 polygons"), Ok)?;
-            sum.depth = sum.depth.max(s.depth);
-        }
-        if let Some(inst) = &c.instance {
-            let Some(o) = self.originals.get(inst.original) else {
-                return fail(path, format!("original {} does not exist", inst.original));
+            acc.expanded = match acc.expanded.checked_add(s.expanded) {
+                Some(e) => e,
+                None => return fail(path, "expands to more than 2^64 polygons"),
             };
-            let t = &inst.transform;
-            if let Err(e) =
-                hirad_core::geometry::Similarity::checked(t.rotation, t.translation, t.scale)
-            {
-                return fail(path, e.to_string());
+            if s.contributes {
+                acc.bbox = acc.bbox.union(s.bbox);
             }
-            let target = done.get(inst.original).copied().unwrap_or_default();
-            if inst.exact {
-                if !c.polygons.is_empty() || !c.children.is_empty() || !c.vertices.is_empty() {
-                    return fail(
-                        path,
-                        format!(
-                            "an exact instance of '{}' cannot hold geometry of its own",
-                            o.name
-                        ),
-                    );
-                }
-                sum = TreeSummary {
-                    expanded: target.expanded,
-                    depth: target.depth + 1,
-                };
-            } else {
-                sum.depth += 1;
-            }
-            if sum.depth > MAX_INSTANCING_DEPTH {
-                return fail(
-                    path,
-                    format!("instances nested deeper than {MAX_INSTANCING_DEPTH} levels"),
-                );
-            }
+            acc.depth = acc.depth.max(s.depth);
         }
-        Ok(sum)
+        let computed = match &c.instance {
+            None => acc,
+            Some(inst) => {
+                let Some(o) = self.originals.get(inst.original) else {
+                    return fail(path, format!("original {} does not exist", inst.original));
+                };
+                let t = &inst.transform;
+                if let Err(e) = Similarity::checked(t.rotation, t.translation, t.scale) {
+                    return fail(path, e.to_string());
+                }
+                let target = done.get(inst.original).copied().unwrap_or_default();
+                let root_box = if target.expanded == 0 {
+                    Aabb::EMPTY
+                } else {
+                    t.aabb(&target.bbox)
+                };
+                if inst.exact {
+                    if !c.polygons.is_empty() || !c.children.is_empty() || !c.vertices.is_empty() {
+                        return fail(
+                            path,
+                            format!(
+                                "an exact instance of '{}' cannot hold geometry of its own",
+                                o.name
+                            ),
+                        );
+                    }
+                    TreeSummary {
+                        expanded: target.expanded,
+                        depth: target.depth + 1,
+                        bbox: root_box,
+                        contributes: false,
+                    }
+                } else {
+                    TreeSummary {
+                        expanded: acc.expanded,
+                        depth: acc.depth + 1,
+                        bbox: t.aabb(&acc.bbox).union(root_box),
+                        contributes: false,
+                    }
+                }
+            }
+        };
+        if computed.depth > MAX_INSTANCING_DEPTH {
+            return fail(
+                path,
+                format!("instances nested deeper than {MAX_INSTANCING_DEPTH} levels"),
+            );
+        }
+        if computed.bbox != Aabb::EMPTY && !computed.bbox.is_finite_nonempty() {
+            return fail(
+                path,
+                "its placement puts geometry beyond the range of 32-bit floats",
+            );
+        }
+        // The box the image stores: the content's, or a zero box for empty content.
+        let contributes = computed.bbox != Aabb::EMPTY;
+        let bbox = if contributes {
+            computed.bbox
+        } else {
+            Aabb::new(glam::Vec3::ZERO, glam::Vec3::ZERO)
+        };
+        Ok(TreeSummary {
+            bbox,
+            contributes,
+            ..computed
+        })
     }
 }
 
@@ -288,7 +351,7 @@ pub(crate) fn references(c: &Cluster, out: &mut Vec<usize>) {
 pub(crate) fn original_order(scene: &Scene) -> Result<Vec<usize>, SceneError> {
     let n = scene.originals.len();
     let mut deps: Vec<Vec<usize>> = Vec::with_capacity(n);
-    for (i, o) in scene.originals.iter().enumerate() {
+    for o in &scene.originals {
         let mut r = Vec::new();
         references(&o.root, &mut r);
         if let Some(bad) = r.iter().find(|&&k| k >= n) {
@@ -297,7 +360,6 @@ pub(crate) fn original_order(scene: &Scene) -> Result<Vec<usize>, SceneError> {
                 format!("instance of original {bad}, which does not exist"),
             );
         }
-        let _ = i;
         deps.push(r);
     }
     // 0 = unvisited, 1 = on the current path, 2 = done. Iterative DFS: no recursion depth

@@ -203,3 +203,43 @@ fn refuses_cycles_and_bad_content() {
             .contains("material 'leaf'")
     );
 }
+
+#[test]
+fn refuses_placements_beyond_f32() {
+    let mut s = sample();
+    s.root.children.push(Cluster {
+        instance: Some(InstanceOf {
+            original: 1,
+            exact: true,
+            transform: Similarity {
+                rotation: Quat::IDENTITY,
+                translation: Vec3::new(3.4e38, 0., 0.),
+                scale: 3e38,
+            },
+        }),
+        ..Cluster::default()
+    });
+    let e = compile(&s).unwrap_err();
+    assert!(e.message.contains("beyond the range"), "{e}");
+    assert!(!e.message.contains("internal"), "{e}");
+}
+
+#[test]
+fn refuses_unused_values() {
+    let mut s = sample();
+    s.suns[0].irradiance[5] = 1.0;
+    assert!(
+        compile(&s)
+            .unwrap_err()
+            .message
+            .contains("past the band count")
+    );
+    let mut s = sample();
+    s.materials[0].data.rho_back[0] = 0.5;
+    assert!(
+        compile(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("material 'white'")
+    );
+}

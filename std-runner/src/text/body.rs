@@ -247,7 +247,7 @@ fn check_polygons(node: &Cluster, pending: &[Pending]) -> Result<(), TextError> 
                 ShapeError::NonConvex => {
                     "this quad is not strictly convex (a dart, a bow-tie or a straight corner); split it into two triangles".to_string()
                 }
-                ShapeError::NonFinite => format!(
+                ShapeError::NonFinite | ShapeError::TooLarge => format!(
                     "this {what} is too large: computing its area overflows 32-bit floats"
                 ),
             };

@@ -426,7 +426,7 @@ fn material_error_pos(e: MaterialError, fields: &[&[(f32, Pos)]; 5]) -> Option<P
             .map(|(_, p)| p)
     };
     match e {
-        MaterialError::NonFinite { .. } => None,
+        MaterialError::NonFinite { .. } | MaterialError::Unused | MaterialError::Bands => None,
         MaterialError::Reflectance { band } => {
             first_bad([rho, back_rho], band, |v| !(0.0..=1.0).contains(&v))
         }

@@ -6,7 +6,7 @@ use glam::{Quat, Vec3, Vec4};
 
 /// The tolerance on the squared length that the core accepts for stored rotations
 /// (`Similarity::checked`) and light directions (`Scene::check`, image validation).
-pub(crate) const UNIT_TOLERANCE: f32 = 1e-5;
+pub(crate) use hirad_core::geometry::UNIT_TOLERANCE;
 
 /// `v` scaled to unit length, or `None` if it is zero. Scales by the largest component
 /// first so that huge or tiny finite values normalise without overflow.
