@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn hirad(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hirad")).args(args).output().expect("run hirad")
+    Command::new(env!("CARGO_BIN_EXE_hirad"))
+        .args(args)
+        .output()
+        .expect("run hirad")
 }
 
 fn ok(args: &[&str]) -> String {
@@ -41,7 +44,9 @@ fn fixtures() -> Vec<PathBuf> {
 }
 
 fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures")
+        .join(name)
 }
 
 fn s(p: &Path) -> &str {
@@ -50,25 +55,39 @@ fn s(p: &Path) -> &str {
 
 /// The `polygons N` line of `hirad info`.
 fn polygons(info: &str) -> u64 {
-    let line = info.lines().find(|l| l.starts_with("polygons")).expect("a polygons line");
+    let line = info
+        .lines()
+        .find(|l| l.starts_with("polygons"))
+        .expect("a polygons line");
     line.split_whitespace().nth(1).unwrap().parse().unwrap()
 }
 
 fn faces(obj: &Path) -> u64 {
-    std::fs::read_to_string(obj).unwrap().lines().filter(|l| l.starts_with("f ")).count() as u64
+    std::fs::read_to_string(obj)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .count() as u64
 }
 
 /// Entries of a directory (to check that nothing, temporary files included, was left).
 fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
     v.sort();
     v
 }
 
 #[test]
 fn help_on_every_command() {
-    for cmd in [&["--help"][..], &["info", "--help"], &["convert", "--help"], &["flatten", "--help"]] {
+    for cmd in [
+        &["--help"][..],
+        &["info", "--help"],
+        &["convert", "--help"],
+        &["flatten", "--help"],
+    ] {
         let out = ok(cmd);
         assert!(out.contains("Usage"), "{out}");
     }
@@ -81,12 +100,25 @@ fn info_and_flatten_on_every_fixture() {
         let info = ok(&["info", s(&f)]);
         let n = polygons(&info);
         assert!(n > 0, "{}: {info}", f.display());
-        let out = dir.path().join(f.file_stem().unwrap()).with_extension("obj");
+        let out = dir
+            .path()
+            .join(f.file_stem().unwrap())
+            .with_extension("obj");
         ok(&["flatten", "-q", s(&f), "-o", s(&out)]);
-        assert_eq!(faces(&out), n, "{}: faces in the flattened OBJ", f.display());
+        assert_eq!(
+            faces(&out),
+            n,
+            "{}: faces in the flattened OBJ",
+            f.display()
+        );
         assert!(out.with_extension("mtl").exists());
         // The flattened OBJ reads back with the same polygon count.
-        assert_eq!(polygons(&ok(&["info", "-q", s(&out)])), n, "{}", f.display());
+        assert_eq!(
+            polygons(&ok(&["info", "-q", s(&out)])),
+            n,
+            "{}",
+            f.display()
+        );
     }
 }
 
@@ -103,7 +135,9 @@ fn chair_room_flattens_to_24_chairs_plus_the_room() {
     fn instances(c: &hirad::scene::Cluster) -> u64 {
         c.instance.is_some() as u64 + c.children.iter().map(instances).sum::<u64>()
     }
-    let chair = scene.original_index("chair").expect("an original named chair");
+    let chair = scene
+        .original_index("chair")
+        .expect("an original named chair");
     let chair_polys = own(&scene.originals[chair].root);
     assert_eq!(instances(&scene.root), 24);
     let expected = own(&scene.root) + 24 * chair_polys;
@@ -125,11 +159,23 @@ fn convert_round_trips() {
         ok(&["convert", "-q", s(&f), "-o", s(&b1)]);
         ok(&["convert", "-q", s(&b1), "-o", s(&t2)]);
         ok(&["convert", "-q", s(&t2), "-o", s(&b2)]);
-        assert_eq!(std::fs::read(&b1).unwrap(), std::fs::read(&b2).unwrap(), "{stem}: hir -> hirb -> hir -> hirb");
+        assert_eq!(
+            std::fs::read(&b1).unwrap(),
+            std::fs::read(&b2).unwrap(),
+            "{stem}: hir -> hirb -> hir -> hirb"
+        );
         // info agrees whatever the format.
         let a = ok(&["info", "--json", s(&f)]);
         let b = ok(&["info", "--json", s(&b1)]);
-        let strip = |j: &str| j.split(",\"format\"").nth(1).unwrap().split(",\"bands\"").nth(1).unwrap().to_string();
+        let strip = |j: &str| {
+            j.split(",\"format\"")
+                .nth(1)
+                .unwrap()
+                .split(",\"bands\"")
+                .nth(1)
+                .unwrap()
+                .to_string()
+        };
         assert_eq!(strip(&a), strip(&b), "{stem}");
     }
 }
@@ -140,7 +186,11 @@ fn located_errors_and_nothing_left_behind() {
     let d = dir.path();
     // Text: an unknown material on line 4.
     let bad = d.join("bad.hir");
-    std::fs::write(&bad, "hirad 1\nbands 1\nscene {\n  tri nope 0 0 0 1 0 0 0 1 0\n}\n").unwrap();
+    std::fs::write(
+        &bad,
+        "hirad 1\nbands 1\nscene {\n  tri nope 0 0 0 1 0 0 0 1 0\n}\n",
+    )
+    .unwrap();
     let err = fails(&["info", s(&bad)]);
     assert!(err.contains(&format!("{}:4:", bad.display())), "{err}");
     let out = d.join("out.obj");
@@ -148,7 +198,13 @@ fn located_errors_and_nothing_left_behind() {
     fails(&["convert", s(&bad), "-o", s(&d.join("out.hirb"))]);
     // Binary: a valid image with one corrupted vertex coordinate.
     let good = d.join("good.hirb");
-    ok(&["convert", "-q", s(&fixture("parallel_squares.hir")), "-o", s(&good)]);
+    ok(&[
+        "convert",
+        "-q",
+        s(&fixture("parallel_squares.hir")),
+        "-o",
+        s(&good),
+    ]);
     let mut bytes = std::fs::read(&good).unwrap();
     let header = *hirad::scene::read_image(&bytes).unwrap().header();
     let at = header.section(hirad_core::image::Section::Vertices).offset as usize;
@@ -156,7 +212,10 @@ fn located_errors_and_nothing_left_behind() {
     let corrupt = d.join("corrupt.hirb");
     std::fs::write(&corrupt, &bytes).unwrap();
     let err = fails(&["info", s(&corrupt)]);
-    assert!(err.contains(&format!("{}: byte {at}: vertex 0", corrupt.display())), "{err}");
+    assert!(
+        err.contains(&format!("{}: byte {at}: vertex 0", corrupt.display())),
+        "{err}"
+    );
     // Truncated binary.
     std::fs::write(&corrupt, &bytes[..bytes.len() / 2]).unwrap();
     let err = fails(&["flatten", s(&corrupt), "-o", s(&out)]);
@@ -171,8 +230,16 @@ fn located_errors_and_nothing_left_behind() {
     assert!(err.contains("missing.hir"), "{err}");
     let err = fails(&["info", s(&d.join("scene.txt"))]);
     assert!(err.contains("unknown scene format"), "{err}");
-    let err = fails(&["flatten", s(&fixture("furnace.hir")), "-o", s(&d.join("x.hir"))]);
+    let err = fails(&[
+        "flatten",
+        s(&fixture("furnace.hir")),
+        "-o",
+        s(&d.join("x.hir")),
+    ]);
     assert!(err.contains(".obj"), "{err}");
     // Nothing half-written: only the inputs remain.
-    assert_eq!(entries(d), ["bad.hir", "bad.obj", "corrupt.hirb", "good.hirb"]);
+    assert_eq!(
+        entries(d),
+        ["bad.hir", "bad.obj", "corrupt.hirb", "good.hirb"]
+    );
 }
