@@ -1,10 +1,11 @@
 //! Splits OBJ/MTL bytes into logical lines of whitespace-separated tokens, each token located
 //! by its 1-based physical line and character column.
 //!
-//! Rules: lines end in `\n` (a `\r` before it is whitespace); `#` starts a comment that runs to
-//! the end of the physical line; a backslash that ends a physical line (trailing whitespace
-//! allowed, comments excluded) joins the next physical line to this logical line. Bytes that
-//! are not UTF-8 are replaced by U+FFFD and reported once per file by the caller.
+//! Rules: lines end in `\n` (a `\r` just before it is whitespace, one elsewhere is reported);
+//! `#` starts a comment that runs to the end of the physical line; a backslash that ends a
+//! physical line (trailing whitespace allowed, comments excluded) joins the next physical line
+//! to this logical line. Bytes that are not UTF-8 are replaced by U+FFFD and reported once per
+//! file by the caller.
 
 use std::ops::Range;
 
@@ -33,6 +34,9 @@ pub(crate) struct Line {
     spans: Vec<Span>,
     /// Some byte of the line was not UTF-8 (replaced by U+FFFD).
     pub invalid_utf8: bool,
+    /// A carriage return that does not end its physical line (a file with classic Mac OS
+    /// line ends would otherwise read as one long line).
+    pub bare_cr: Option<Pos>,
 }
 
 impl Line {
@@ -123,6 +127,7 @@ impl<'a> Lexer<'a> {
         out.text.clear();
         out.spans.clear();
         out.invalid_utf8 = false;
+        out.bare_cr = None;
         while self.at < self.src.len() {
             let rest = &self.src[self.at..];
             let len = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
@@ -155,6 +160,13 @@ fn add_physical(out: &mut Line, text: &str, line: u32) -> bool {
             }
         }
     };
+    let body = content.strip_suffix('\r').unwrap_or(content);
+    if out.bare_cr.is_none()
+        && let Some(k) = body.find('\r')
+    {
+        let col = u32::try_from(body[..k].chars().count() + 1).unwrap_or(u32::MAX);
+        out.bare_cr = Some(Pos { line, col });
+    }
     if !out.text.is_empty() {
         out.text.push(' ');
     }

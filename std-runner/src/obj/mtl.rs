@@ -10,6 +10,7 @@ use super::ObjError;
 use super::diag::{Warnings, error};
 use super::lex::{Lexer, Line, Pos};
 use super::number::parse_f32;
+use super::reader::BARE_CR;
 use hirad_core::limits::MAX_NAME_BYTES;
 use hirad_core::material::{MaterialData, MaterialError};
 
@@ -89,6 +90,9 @@ pub(crate) fn parse_mtl(
     let mut done = Vec::new();
     let mut current: Option<Pending> = None;
     while lexer.next_line(&mut line) {
+        if let Some(at) = line.bare_cr {
+            return Err(error(file, at, BARE_CR));
+        }
         if line.invalid_utf8 {
             warnings.once(
                 file,
@@ -236,6 +240,8 @@ fn check(p: &Pending, file: &str, now: Key) -> Result<(), ObjError> {
         // Either statement can break conservation; the one just read did.
         MaterialError::EnergyNotConserved { band } => (now, band),
         MaterialError::NonFinite { band } => (now, band),
+        // The importer never fills unused values; blame the statement just read.
+        MaterialError::Unused | MaterialError::Bands => (now, 0),
     };
     let colour = match key {
         Key::Kd => p.kd,

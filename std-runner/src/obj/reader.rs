@@ -20,6 +20,10 @@ const FREE_FORM: &[&str] = &[
     "sp", "end", "con", "ctech", "stech",
 ];
 
+/// The error for a carriage return inside a line.
+pub(crate) const BARE_CR: &str =
+    "carriage return inside a line: lines must end in \\n or \\r\\n (not \\r alone)";
+
 /// The state of an import in progress.
 struct Reader<'a> {
     load_mtl: &'a mut dyn FnMut(&str) -> Result<Vec<u8>, String>,
@@ -100,6 +104,9 @@ fn name_of(line: &Line) -> Result<Option<String>, ObjError> {
 
 impl Reader<'_> {
     fn statement(&mut self, line: &Line) -> Result<(), ObjError> {
+        if let Some(at) = line.bare_cr {
+            return Err(error("", at, BARE_CR));
+        }
         if line.invalid_utf8 {
             self.warnings.once(
                 "",
@@ -227,7 +234,13 @@ impl Reader<'_> {
         })?;
         if self.pieces.is_empty() {
             self.counts.skipped_faces += 1;
-            self.warnings.add("", at, "degenerate face skipped");
+            let first = self.points.first().copied().unwrap_or_default();
+            let message = if self.points.iter().any(|p| !(*p - first).is_finite()) {
+                "face too large to measure in 32-bit floats skipped"
+            } else {
+                "degenerate face skipped"
+            };
+            self.warnings.add("", at, message);
             return Ok(());
         }
         if skipped > 0 {

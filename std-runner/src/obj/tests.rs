@@ -342,7 +342,7 @@ proptest! {
     /// Any points: splitting never panics and every piece it returns is valid.
     #[test]
     fn arbitrary_polygons_give_valid_pieces(
-        pts in prop::collection::vec((-4i8..4, -4i8..4, -1i8..2), 3..12),
+        pts in prop::collection::vec((-4i8..4, -4i8..4, -1i8..2), 3..30),
     ) {
         let pts: Vec<Vec3> = pts
             .iter()
@@ -672,6 +672,7 @@ fn located_mtl_errors() {
         ("Kd 0.5\n", (1, 1), "before any newmtl"),
         ("newmtl\n", (1, 7), "needs a material name"),
         ("newmtl a\nKd 0.5 0.", (2, 10), "needs 1 or 3 values"),
+        ("newmtl a\rKd 0.5\r\n", (1, 9), "carriage return"),
     ];
     for (mtl, (line, col), msg) in cases {
         let ((f, l, c), m) = fails(obj, &[("bad.mtl", mtl)]);
@@ -691,6 +692,15 @@ fn error_display_names_the_file() {
     assert_eq!(
         e.to_string(),
         "1:3: vertex index 1 is out of range (0 defined so far)"
+    );
+}
+
+#[test]
+fn faces_beyond_f32_are_skipped_with_a_reason() {
+    let r = import_str("v -3e38 0 0\nv 3e38 0 0\nv 0 3e38 0\nf 1 2 3\n").unwrap();
+    assert_eq!(
+        r.warnings,
+        ["4:1: face too large to measure in 32-bit floats skipped"]
     );
 }
 
@@ -903,13 +913,27 @@ Tf 0.05 0.4 0.05
     assert!(e.warnings[2].contains("cluster names with '#'"));
 }
 
+/// Changes the band count of `m`, zeroing the values past it (the scene check wants that).
+fn set_bands(m: &mut MaterialData, bands: u8) {
+    m.bands = bands;
+    for v in [
+        &mut m.rho_front,
+        &mut m.emit_front,
+        &mut m.rho_back,
+        &mut m.tau,
+        &mut m.emit_back,
+    ] {
+        v[usize::from(bands)..].fill(0.0);
+    }
+}
+
 #[test]
 fn export_converts_bands_and_warns_about_what_it_loses() {
     let mut s = export_scene();
     s.bands = 2;
     s.band_names = vec!["par".into(), "nir".into()];
     for m in &mut s.materials {
-        m.data.bands = 2;
+        set_bands(&mut m.data, 2);
     }
     s.suns.push(crate::scene::light(Vec3::NEG_Z, &[100., 50.]));
     let (_, mtl, e) = export_strings(&s);
@@ -927,7 +951,7 @@ fn export_converts_bands_and_warns_about_what_it_loses() {
     let mut s = export_scene();
     s.bands = 5;
     for m in &mut s.materials {
-        m.data.bands = 5;
+        set_bands(&mut m.data, 5);
     }
     let (_, mtl, e) = export_strings(&s);
     assert!(mtl.contains("newmtl grey\nKd 0.5 0.25 0.125\n"), "{mtl}");
@@ -936,7 +960,7 @@ fn export_converts_bands_and_warns_about_what_it_loses() {
     let mut s = export_scene();
     s.bands = 1;
     for m in &mut s.materials {
-        m.data.bands = 1;
+        set_bands(&mut m.data, 1);
     }
     let (_, mtl, _) = export_strings(&s);
     assert!(mtl.contains("newmtl grey\nKd 0.5 0.5 0.5\n"), "{mtl}");
