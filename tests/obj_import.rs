@@ -328,6 +328,15 @@ fn missing_mtl_on_disk_is_located() {
     assert!(e.message.contains("'missing.mtl'"), "{e}");
 }
 
+#[cfg(unix)]
+#[test]
+fn devices_are_not_read_as_mtl_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = obj::import(b"mtllib /dev/zero\n", &mut obj::load_mtl_from(dir.path())).unwrap_err();
+    assert_eq!((e.line, e.column), (1, 8));
+    assert!(e.message.contains("not a regular file"), "{e}");
+}
+
 #[test]
 fn mtl_named_by_a_foreign_absolute_path_is_found_beside_the_obj() {
     let dir = tempfile::tempdir().unwrap();

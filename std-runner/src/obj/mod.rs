@@ -16,7 +16,14 @@
 //!   Each cluster holds the vertices its faces use; clusters without faces are dropped.
 //! * Materials: 3 bands (R, G, B). `Kd` is the front reflectance, `Ke` the emitted exitance
 //!   (W/m^2), `Tf` the diffuse transmittance of a two-sided material whose back reflectance
-//!   is `Kd`. Faces before any `usemtl` use [`DEFAULT_MATERIAL`] (reflectance 0.5).
+//!   is `Kd`, except `Tf 1 1 1`, which Maya and 3ds Max write for opaque materials and is
+//!   ignored with a warning. A material without `Kd` reflects 0.5. Faces before any `usemtl`
+//!   use [`DEFAULT_MATERIAL`] (reflectance 0.5, unless an MTL file defines that name).
+//! * `mtllib a.mtl b.mtl` reads each file once; when one of the list cannot be read, the
+//!   whole rest of the line is tried as one name (names with spaces). A material defined
+//!   twice keeps its first definition, with a warning.
+//! * Lines end in `\n` or `\r\n`; a `\r` anywhere else is an error (classic Mac OS files
+//!   would otherwise read as one line). Bytes that are not UTF-8 are replaced, with a warning.
 //!
 //! # Export
 //! The expansion of the scene is streamed: never held in memory. Face k (1-based) is the
@@ -37,6 +44,7 @@ mod vec64;
 
 pub use diag::MAX_WARNINGS;
 pub use materials::DEFAULT_MATERIAL;
+pub use mtl::DEFAULT_REFLECTANCE;
 pub use split::MAX_CLIPPED_CORNERS;
 
 use crate::scene::Scene;
@@ -114,17 +122,18 @@ pub fn import(
 
 /// A `load_mtl` for [`import`] that reads MTL files from `dir` (the OBJ's folder). A name
 /// that cannot be read there as written (an absolute path from another machine, say) is tried
-/// once more by its last component, split at `/` or `\\`.
+/// once more by its last component, split at `/` or `\`. Only regular files are read, so an
+/// OBJ naming `/dev/zero` or a pipe cannot make the import hang.
 pub fn load_mtl_from(dir: &Path) -> impl FnMut(&str) -> Result<Vec<u8>, String> + '_ {
     move |name: &str| {
         let first = dir.join(name);
-        match std::fs::read(&first) {
+        match read_regular(&first) {
             Ok(bytes) => Ok(bytes),
             Err(e) => {
                 let base = name.rsplit(['/', '\\']).next().unwrap_or(name);
                 if base != name
                     && !base.is_empty()
-                    && let Ok(bytes) = std::fs::read(dir.join(base))
+                    && let Ok(bytes) = read_regular(&dir.join(base))
                 {
                     return Ok(bytes);
                 }
@@ -132,6 +141,17 @@ pub fn load_mtl_from(dir: &Path) -> impl FnMut(&str) -> Result<Vec<u8>, String> 
             }
         }
     }
+}
+
+/// Reads `path` if it is a regular file.
+fn read_regular(path: &Path) -> io::Result<Vec<u8>> {
+    let mut file = std::fs::File::open(path)?;
+    if !file.metadata()?.is_file() {
+        return Err(io::Error::other("not a regular file"));
+    }
+    let mut bytes = Vec::new();
+    io::Read::read_to_end(&mut file, &mut bytes)?;
+    Ok(bytes)
 }
 
 /// What an export wrote.

@@ -18,7 +18,7 @@ use hirad_core::material::{MaterialData, MaterialError};
 pub(crate) const OBJ_BANDS: u8 = 3;
 
 /// Reflectance of a material without `Kd`, and of the built-in `default` material.
-pub(crate) const DEFAULT_REFLECTANCE: f32 = 0.5;
+pub const DEFAULT_REFLECTANCE: f32 = 0.5;
 
 /// A material read from an MTL file.
 #[derive(Clone, Debug)]
