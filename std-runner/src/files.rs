@@ -142,11 +142,7 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
         Format::Obj => {
             let bytes = read(path)?;
             let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let mut load_mtl = |name: &str| -> Result<Vec<u8>, String> {
-                let p = dir.join(name);
-                std::fs::read(&p)
-                    .map_err(|e| format!("cannot read material library {}: {e}", p.display()))
-            };
+            let mut load_mtl = obj::load_mtl_from(&dir);
             let imported = obj::import(&bytes, &mut load_mtl).map_err(|e| {
                 if e.file.is_empty() {
                     anyhow!("{}:{e}", path.display())
