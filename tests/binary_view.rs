@@ -422,3 +422,40 @@ fn instancing_too_deep_is_refused() {
         limit
     );
 }
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// Arbitrary bytes, with and without a valid header, never panic the view.
+        #[test]
+        fn arbitrary_bytes_never_panic(mut bytes in proptest::collection::vec(any::<u8>(), 0..4096), keep_header in any::<bool>()) {
+            if keep_header {
+                let valid = compile(&sample()).unwrap();
+                let n = valid.len().min(bytes.len()).min(std::mem::size_of::<Header>());
+                bytes[..n].copy_from_slice(&valid[..n]);
+            }
+            if let Ok(v) = read_image(&bytes) {
+                let scene = decompile(&v).unwrap();
+                compile(&scene).unwrap();
+            }
+        }
+
+        /// A valid image with several random bytes overwritten is refused or still consistent.
+        #[test]
+        fn mutated_images_never_panic(edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..12)) {
+            let mut bytes = compile(&sample()).unwrap();
+            for (i, v) in edits {
+                let at = i.index(bytes.len());
+                bytes[at] = v;
+            }
+            if let Ok(v) = read_image(&bytes) {
+                let scene = decompile(&v).unwrap();
+                compile(&scene).unwrap();
+            }
+        }
+    }
+}
