@@ -122,6 +122,36 @@ fn info_and_flatten_on_every_fixture() {
     }
 }
 
+/// OBJ files in the styles of common modelling tools, and two written by Blender itself.
+#[test]
+fn info_and_flatten_on_exported_obj_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/obj");
+    let mut files = Vec::new();
+    for d in [root.clone(), root.join("blender")] {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|e| e == "obj") {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    assert!(files.len() >= 10);
+    for f in files {
+        let n = polygons(&ok(&["info", "-q", s(&f)]));
+        let out = dir.path().join(f.file_name().unwrap());
+        ok(&["flatten", "-q", s(&f), "-o", s(&out)]);
+        assert_eq!(faces(&out), n, "{}", f.display());
+        assert_eq!(
+            polygons(&ok(&["info", "-q", s(&out)])),
+            n,
+            "{}",
+            f.display()
+        );
+    }
+}
+
 #[test]
 fn chair_room_flattens_to_24_chairs_plus_the_room() {
     let path = fixture("chair_room.hir");
