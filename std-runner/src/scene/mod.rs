@@ -10,11 +10,13 @@ mod check;
 mod compile;
 mod decompile;
 mod expand;
+mod sample;
 
 pub use check::SceneError;
 pub use compile::compile;
 pub use decompile::{decompile, read_image};
 pub use expand::{ExpandVisitor, ExpandedNode, expand};
+pub use sample::sample;
 
 pub use hirad_core::geometry::Similarity;
 pub use hirad_core::image::{CameraData, LightData, PolygonRecord as Polygon};

@@ -11,6 +11,8 @@ mod resolve;
 mod symbols;
 mod units;
 
+pub use names::KEYWORDS;
+
 use crate::scene::Scene;
 use std::fmt;
 

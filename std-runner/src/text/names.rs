@@ -4,7 +4,7 @@
 use std::fmt::Write;
 
 /// Every keyword of the format. A bare word that is a keyword is never a name.
-pub(crate) const KEYWORDS: [&str; 33] = [
+pub const KEYWORDS: [&str; 33] = [
     "hirad",
     "bands",
     "material",
