@@ -197,17 +197,20 @@ pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
         _ => PathBuf::from("."),
     };
     let stem = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    tempfile::Builder::new()
-        .prefix(&format!(".{stem}."))
-        .suffix(".tmp")
-        .tempfile_in(&dir)
-        .with_context(|| {
-            format!(
-                "{}: cannot create a temporary file in {}",
-                path.display(),
-                dir.display()
-            )
-        })
+    let prefix = format!(".{stem}.");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // An output is an ordinary file: read-write for everyone the umask allows, not the
+    // owner-only mode of a temporary file.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    builder.tempfile_in(&dir).with_context(|| {
+        format!(
+            "{}: cannot create a temporary file in {}",
+            path.display(),
+            dir.display()
+        )
+    })
 }
 
 /// Flushes a finished temporary file to disk and renames it to `path`.

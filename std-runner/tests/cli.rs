@@ -178,6 +178,24 @@ fn chair_room_flattens_to_24_chairs_plus_the_room() {
     assert_eq!(polygons(&ok(&["info", s(&path)])), expected);
 }
 
+/// Outputs are ordinary files (mode from the umask), not owner-only temporary files.
+#[cfg(unix)]
+#[test]
+fn outputs_have_ordinary_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("box.hirb");
+    ok(&[
+        "convert",
+        "-q",
+        s(&fixture("cornell_box.hir")),
+        "-o",
+        s(&out),
+    ]);
+    let mode = std::fs::metadata(&out).unwrap().permissions().mode();
+    assert_eq!(mode & 0o644, 0o644, "mode {mode:o}");
+}
+
 #[test]
 fn convert_round_trips() {
     let dir = tempfile::tempdir().unwrap();
