@@ -291,3 +291,182 @@ fn located_errors_and_nothing_left_behind() {
         ["bad.hir", "bad.obj", "corrupt.hirb", "good.hirb"]
     );
 }
+
+/// Every class of malformed input, in every format, through the command line: a non-zero
+/// status and a message that starts with the file and the location of the fault.
+#[test]
+fn malformed_inputs_are_located() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = "hirad 1\nbands 3\nmaterial m rho 0.5 0.5 0.5\n";
+    let deep = format!("{head}scene {{\n{}", "cluster {\n".repeat(10_000));
+    let text_cases: Vec<(&str, String, &str)> = vec![
+        (
+            "truncated",
+            format!("{head}scene {{\n  v 0 0 0\n  tri m 0"),
+            ":6:3:",
+        ),
+        (
+            "wrong count",
+            "hirad 1\nbands 3\nmaterial m rho 0.5 0.5\nscene {}\n".into(),
+            ":3:12:",
+        ),
+        ("nan", format!("{head}scene {{\n  v nan 0 0\n}}\n"), ":5:5:"),
+        (
+            "infinite",
+            format!("{head}scene {{\n  v 1e39 0 0\n}}\n"),
+            ":5:5:",
+        ),
+        (
+            "index out of range",
+            format!("{head}scene {{\n  v 0 0 0\n  tri m 0 1 7\n}}\n"),
+            ":6:11:",
+        ),
+        (
+            "cycle",
+            format!(
+                "{head}original a {{ instance b exact }}\noriginal b {{ instance a exact }}\nscene {{}}\n"
+            ),
+            ":5:14:",
+        ),
+        ("10,000-deep nesting", deep, ":68:1:"),
+        (
+            "absurd count",
+            "hirad 1\nbands 4294967295\n".into(),
+            ":2:7:",
+        ),
+        (
+            "absurd index",
+            format!("{head}scene {{\n  tri m 0 1 99999999999\n}}\n"),
+            ":5:13:",
+        ),
+    ];
+    for (what, text, location) in text_cases {
+        let p = dir.path().join("bad.hir");
+        std::fs::write(&p, text).unwrap();
+        let err = fails(&["info", s(&p)]);
+        let prefix = format!("error: {}{location}", p.display());
+        assert!(
+            err.starts_with(&prefix),
+            "{what}: expected '{prefix}...', got {err}"
+        );
+        assert!(
+            err.split(':').count() >= 4,
+            "{what}: line and column in {err}"
+        );
+    }
+
+    let obj_cases: Vec<(&str, &str, &str)> = vec![
+        ("truncated", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2", ":4:1:"),
+        ("nan", "v 0 nan 0\n", ":1:5:"),
+        ("infinite", "v 0 0 -1e39\n", ":1:7:"),
+        (
+            "index out of range",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n",
+            ":4:7:",
+        ),
+        (
+            "index zero",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+            ":4:3:",
+        ),
+        (
+            "absurd index",
+            "v 0 0 0\nf 1 1 99999999999999999999999\n",
+            ":2:7:",
+        ),
+        ("missing mtl", "mtllib nowhere.mtl\n", ":1:8:"),
+        ("unknown material", "usemtl nowhere\n", ":1:8:"),
+    ];
+    for (what, text, location) in obj_cases {
+        let p = dir.path().join("bad.obj");
+        std::fs::write(&p, text).unwrap();
+        let err = fails(&["info", s(&p)]);
+        let prefix = format!("error: {}{location}", p.display());
+        assert!(
+            err.starts_with(&prefix),
+            "{what}: expected '{prefix}...', got {err}"
+        );
+    }
+
+    // Binary: faults at known offsets of a valid image.
+    let good = dir.path().join("good.hirb");
+    ok(&[
+        "convert",
+        "-q",
+        s(&fixture("small_plant.hir")),
+        "-o",
+        s(&good),
+    ]);
+    let bytes = std::fs::read(&good).unwrap();
+    let header = *hirad::scene::read_image(&bytes).unwrap().header();
+    use hirad_core::image::Section;
+    let at = |sec: Section, i: u64| {
+        let e = header.section(sec);
+        (e.offset + i * e.record_size as u64) as usize
+    };
+    type Patch = Box<dyn Fn(&mut Vec<u8>)>;
+    let put = |off: usize, v: [u8; 4]| -> Patch {
+        Box::new(move |b: &mut Vec<u8>| b[off..off + 4].copy_from_slice(&v))
+    };
+    let count_at = 40 + 24 * Section::Polygons as usize + 8;
+    let bin_cases: Vec<(&str, Patch, String)> = vec![
+        (
+            "truncated",
+            Box::new(|b: &mut Vec<u8>| b.truncate(b.len() - 9)),
+            "byte 32:".into(),
+        ),
+        (
+            "wrong count",
+            put(
+                count_at,
+                (header.section(Section::Polygons).count as u32 + 1).to_le_bytes(),
+            ),
+            format!(
+                "byte {}: section 'nodes' starts at byte",
+                40 + 24 * Section::Nodes as usize
+            ),
+        ),
+        (
+            "nan",
+            put(at(Section::Vertices, 3) + 8, f32::NAN.to_le_bytes()),
+            format!("byte {}:", at(Section::Vertices, 3)),
+        ),
+        (
+            "infinite",
+            put(at(Section::Values, 2), f32::INFINITY.to_le_bytes()),
+            format!("byte {}:", at(Section::Values, 2)),
+        ),
+        (
+            "index out of range",
+            put(at(Section::Polygons, 5) + 4, 5000u32.to_le_bytes()),
+            format!("byte {}:", at(Section::Polygons, 5)),
+        ),
+        (
+            "cycle",
+            put(at(Section::Instances, 0), 1u32.to_le_bytes()),
+            format!(
+                "byte {}: instance 0: original 1 is the original being defined",
+                at(Section::Instances, 0)
+            ),
+        ),
+        (
+            "absurd size",
+            Box::new(move |b: &mut Vec<u8>| {
+                b[count_at..count_at + 8].copy_from_slice(&(1u64 << 50).to_le_bytes())
+            }),
+            format!("byte {count_at}: section 'polygons' claims an absurd record count"),
+        ),
+    ];
+    for (what, patch, location) in bin_cases {
+        let mut b = bytes.clone();
+        patch(&mut b);
+        let p = dir.path().join("bad.hirb");
+        std::fs::write(&p, &b).unwrap();
+        let err = fails(&["info", s(&p)]);
+        let prefix = format!("error: {}: {location}", p.display());
+        assert!(
+            err.starts_with(&prefix),
+            "{what}: expected '{prefix}...', got {err}"
+        );
+    }
+}
