@@ -435,6 +435,34 @@ proptest! {
         prop_assert_eq!(compile(&back).unwrap(), bytes);
     }
 
+    /// text -> binary -> text: the binary image reads back as a scene whose text compiles to
+    /// the same bytes; that text is a fixed point; and it is the original text whenever the
+    /// originals were already in dependency order (compiling sorts them).
+    #[test]
+    fn text_binary_text_round_trip(tape in proptest::collection::vec(any::<u32>(), 0..3000)) {
+        let s = scene(&tape);
+        let text = print(&s);
+        let bytes = compile(&parse(text.as_bytes()).unwrap()).unwrap();
+        let from_binary = decompile(&read_image(&bytes).unwrap()).unwrap();
+        let text2 = print(&from_binary);
+        let bytes2 = compile(&parse(text2.as_bytes()).unwrap()).unwrap();
+        prop_assert_eq!(&bytes2, &bytes);
+        let text3 = print(&decompile(&read_image(&bytes2).unwrap()).unwrap());
+        prop_assert_eq!(&text3, &text2);
+        let ordered = s.originals.iter().enumerate().all(|(k, o)| {
+            let mut refs = Vec::new();
+            let mut stack = vec![&o.root];
+            while let Some(c) = stack.pop() {
+                refs.extend(c.instance.map(|i| i.original));
+                stack.extend(&c.children);
+            }
+            refs.iter().all(|&r| r < k)
+        });
+        if ordered {
+            prop_assert_eq!(&text2, &text);
+        }
+    }
+
     #[test]
     fn mutated_documents_never_panic(
         tape in proptest::collection::vec(any::<u32>(), 0..300),
