@@ -17,10 +17,14 @@ compile_error!(
     "hirad-core reads little-endian scene images in place; big-endian hosts are not supported yet"
 );
 
+pub mod formfactor;
 pub mod geometry;
 pub mod handles;
 pub mod image;
 pub mod limits;
 pub mod material;
+pub mod sampling;
+pub mod sink;
+pub mod visibility;
 
 pub use handles::*;

@@ -1,0 +1,190 @@
+//! Exact, unoccluded form factors from a point to a polygon (Lambert's contour integral),
+//! with the polygon clipped to the half-space the point can see.
+//!
+//! For a receiving point `p` with unit normal `n` and a planar polygon, the form factor is
+//! `F = 1/(2 pi) * sum_i angle(r_i, r_i+1) * n . normalize(r_i x r_i+1)` with `r_i = v_i - p`,
+//! taken over the part of the polygon in front of `p` (`n . (y - p) > 0`). It is exact for any
+//! distance, so form factors from one point to the pieces of a closed surface sum to 1: this
+//! is what keeps a closed furnace at `B = E / (1 - rho)`. Computed in f64.
+
+use glam::{DVec3, Vec3};
+
+/// Most corners a clipped triangle or quad can have.
+const MAX_CLIPPED: usize = 5;
+
+/// Form factor (dimensionless, 0..=1) from a differential area at `p` with unit normal `n` to
+/// the convex planar polygon `poly` (3 or 4 corners, either orientation), counting only the
+/// part in front of the tangent plane of `p`. Which side of the polygon faces `p` is the
+/// caller's concern (see [`facing_side`]).
+pub fn point_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
+    point_polygon_f64(p.as_dvec3(), n.as_dvec3(), poly) as f32
+}
+
+/// [`point_polygon`] in f64, for sums that must close to 1 within 1e-9.
+pub fn point_polygon_f64(p: DVec3, n: DVec3, poly: &[Vec3]) -> f64 {
+    let mut clipped = [DVec3::ZERO; MAX_CLIPPED];
+    let k = clip_front(p, n, poly, &mut clipped);
+    if k < 3 {
+        return 0.0;
+    }
+    let mut sum = 0.0f64;
+    for i in 0..k {
+        let a = clipped[i] - p;
+        let b = clipped[(i + 1) % k] - p;
+        let c = a.cross(b);
+        let len = c.length();
+        if len <= 1e-300 || !len.is_finite() {
+            continue;
+        }
+        let angle = libm::atan2(len, a.dot(b));
+        sum += angle * n.dot(c) / len;
+    }
+    (sum.abs() / (2.0 * core::f64::consts::PI)).min(1.0)
+}
+
+/// Clips `poly` to the half-space `n . (y - p) > 0`; returns the corner count written to
+/// `out` (0 when nothing is in front).
+fn clip_front(p: DVec3, n: DVec3, poly: &[Vec3], out: &mut [DVec3; MAX_CLIPPED]) -> usize {
+    let m = poly.len().min(4);
+    let mut k = 0;
+    for i in 0..m {
+        let a = poly[i].as_dvec3();
+        let b = poly[(i + 1) % m].as_dvec3();
+        let da = n.dot(a - p);
+        let db = n.dot(b - p);
+        if da > 0.0 && k < MAX_CLIPPED {
+            out[k] = a;
+            k += 1;
+        }
+        if (da > 0.0) != (db > 0.0) && k < MAX_CLIPPED {
+            let t = da / (da - db);
+            if t.is_finite() {
+                out[k] = a + (b - a) * t;
+                k += 1;
+            }
+        }
+    }
+    k
+}
+
+/// Which side of a polygon with front normal `normal` through `on_plane` faces the point
+/// `p`: `Some(0)` front, `Some(1)` back, `None` when `p` lies in the polygon's plane
+/// (relative to the distance, so the test is scale-free).
+pub fn facing_side(p: Vec3, on_plane: Vec3, normal: Vec3) -> Option<usize> {
+    let d = p - on_plane;
+    let s = normal.dot(d);
+    if s.abs() <= 1e-7 * d.length() {
+        None
+    } else if s > 0.0 {
+        Some(0)
+    } else {
+        Some(1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f32, y: f32, z: f32) -> Vec3 {
+        Vec3::new(x, y, z)
+    }
+
+    /// Area average over a receiver square [0,1]^2 at z = 0 (normal +z), midpoint rule.
+    fn average(emitter: &[Vec3], n_pts: usize) -> f64 {
+        let mut sum = 0.0;
+        for i in 0..n_pts {
+            for j in 0..n_pts {
+                let p = DVec3::new(
+                    (i as f64 + 0.5) / n_pts as f64,
+                    (j as f64 + 0.5) / n_pts as f64,
+                    0.0,
+                );
+                sum += point_polygon_f64(p, DVec3::Z, emitter);
+            }
+        }
+        sum / (n_pts * n_pts) as f64
+    }
+
+    #[test]
+    fn parallel_unit_squares() {
+        let top = [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)];
+        let f = average(&top, 64);
+        assert!((f - 0.199825).abs() < 2e-5, "{f}");
+    }
+
+    #[test]
+    fn perpendicular_squares_sharing_an_edge() {
+        // Receiver [0,1]^2 in z = 0; emitter in the plane x = 0, y in [0,1], z in [0,1].
+        let wall = [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)];
+        let f = average(&wall, 128);
+        assert!((f - 0.200044).abs() < 2e-4, "{f}");
+    }
+
+    #[test]
+    fn a_closed_cube_sums_to_one() {
+        // Faces of the unit cube; points on the floor see the five others.
+        let faces = [
+            [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+            [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
+            [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+            [v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+        ];
+        for p in [
+            DVec3::new(0.5, 0.5, 0.0),
+            DVec3::new(0.01, 0.99, 0.0),
+            DVec3::new(0.3, 0.001, 0.0),
+        ] {
+            let sum: f64 = faces
+                .iter()
+                .map(|f| point_polygon_f64(p, DVec3::Z, f))
+                .sum();
+            assert!((sum - 1.0).abs() < 1e-9, "{p}: {sum}");
+        }
+        // Split the walls into triangles: still 1.
+        let p = DVec3::new(0.2, 0.7, 0.0);
+        let mut sum = 0.0;
+        for f in &faces {
+            sum += point_polygon_f64(p, DVec3::Z, &[f[0], f[1], f[2]]);
+            sum += point_polygon_f64(p, DVec3::Z, &[f[0], f[2], f[3]]);
+        }
+        assert!((sum - 1.0).abs() < 1e-9, "{sum}");
+    }
+
+    #[test]
+    fn clipped_and_behind() {
+        let p = Vec3::ZERO;
+        // Entirely behind the tangent plane.
+        let below = [
+            v(-1., -1., -1.),
+            v(1., -1., -1.),
+            v(1., 1., -1.),
+            v(-1., 1., -1.),
+        ];
+        assert_eq!(point_polygon(p, Vec3::Z, &below), 0.0);
+        // A huge vertical wall straddling the plane: half of it counts, and a far wall
+        // tends to 1/2 of the hemisphere's projected area.
+        let wall = [
+            v(-1e4, 1., -1e4),
+            v(1e4, 1., -1e4),
+            v(1e4, 1., 1e4),
+            v(-1e4, 1., 1e4),
+        ];
+        let f = point_polygon(p, Vec3::Z, &wall);
+        assert!((f - 0.5).abs() < 1e-3, "{f}");
+        // Scale-free: the same configuration in millimetres and kilometres.
+        let sq = |s: f32| [v(0., 0., s), v(s, 0., s), v(s, s, s), v(0., s, s)];
+        let a = point_polygon(v(0.3e-3, 0.2e-3, 0.), Vec3::Z, &sq(1e-3));
+        let b = point_polygon(v(0.3e3, 0.2e3, 0.), Vec3::Z, &sq(1e3));
+        assert!((a - b).abs() < 1e-6, "{a} {b}");
+    }
+
+    #[test]
+    fn sides() {
+        assert_eq!(facing_side(v(0., 0., 1.), Vec3::ZERO, Vec3::Z), Some(0));
+        assert_eq!(facing_side(v(0., 0., -1.), Vec3::ZERO, Vec3::Z), Some(1));
+        assert_eq!(facing_side(v(5., 0., 0.), Vec3::ZERO, Vec3::Z), None);
+    }
+}

@@ -1,0 +1,30 @@
+//! Visibility behind one trait, so that the solver runs with the core's own BVH, the runner's,
+//! or an engine's ray caster.
+
+use glam::Vec3;
+
+/// Fraction of light that passes between two points.
+///
+/// `skip` names up to two polygons to ignore (the surfaces the segment starts and ends on;
+/// [`crate::limits::NONE`] for none), so that no absolute offset is needed. Polygon ids are
+/// the solver's polygon indices (for a fully expanded scene, the global ids).
+pub trait Visibility: Sync {
+    /// 1.0 when nothing blocks the open segment `from`..`to`, 0.0 when it is blocked.
+    fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32;
+}
+
+/// Nothing ever blocks: for scenes known to be convex, and for tests.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Unoccluded;
+
+impl Visibility for Unoccluded {
+    fn transmittance(&self, _: Vec3, _: Vec3, _: [u32; 2]) -> f32 {
+        1.0
+    }
+}
+
+impl<V: Visibility + ?Sized> Visibility for &V {
+    fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
+        (**self).transmittance(from, to, skip)
+    }
+}
