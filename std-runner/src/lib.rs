@@ -6,3 +6,4 @@ pub mod files;
 pub mod obj;
 pub mod scene;
 pub mod text;
+pub mod visibility;

@@ -1,0 +1,509 @@
+//! Visibility between two points by ray casting through an `obvhs` compressed wide BVH
+//! (CWBVH) over the scene's polygons: the runner's implementation of the core's
+//! [`Visibility`] trait.
+//!
+//! The BVH only culls; whether a polygon blocks a segment is decided by an exact test in
+//! f64 on the original world-space corners, so the answer is a function of the geometry alone
+//! (not of the tree's shape, the build parameters or the thread count).
+//!
+//! Scale-freedom: the segment is parameterised by `t` in [0, 1] from `from` to `to`, and only
+//! crossings with [`T_MARGIN`] < `t` < 1 - [`T_MARGIN`] count, a margin relative to the
+//! segment's own length. The BVH is built in a normalised frame (scene centred, scaled by a
+//! power of two to a unit half-extent) and its boxes are padded by [`BOX_PAD`] of that unit,
+//! which makes the f32 box tests conservative at any scene scale.
+
+use glam::{DVec3, Vec3, Vec3A};
+use hirad_core::visibility::Visibility;
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb as BvhAabb;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::ray::Ray;
+use std::fmt;
+use std::time::Duration;
+
+/// Crossings closer than this fraction of the segment's length to either end are ignored
+/// (the surfaces the segment starts and ends on are skipped by id; this margin only absorbs
+/// rounding where the segment meets a neighbouring polygon).
+pub const T_MARGIN: f32 = 1e-5;
+
+/// Padding of every primitive's box, in the normalised frame (scene half-extent = 1): keeps
+/// the f32 slab tests of the BVH conservative for grazing rays and for ray directions whose
+/// components are too small for obvhs to invert.
+const BOX_PAD: f32 = 1e-5;
+
+/// obvhs' CWBVH node test clamps the entry distance to at least 1e-4 (in ray units) and
+/// ignores `Ray::tmin`. Rays are therefore given `(to - from) / RAY_STRETCH` as direction so
+/// that the segment spans `0..RAY_STRETCH` and the clamp (1e-4 / 16 = 6.25e-6 of the segment)
+/// lies below [`T_MARGIN`]. A power of two keeps the scaling exact.
+const RAY_STRETCH: f32 = 16.0;
+
+/// Why a polygon list cannot be used for visibility.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum VisibilityError {
+    /// A polygon does not have 3 or 4 corners.
+    Corners {
+        /// Index of the polygon.
+        polygon: usize,
+        /// Its corner count.
+        count: usize,
+    },
+    /// A corner is NaN or infinite.
+    NonFinite {
+        /// Index of the polygon.
+        polygon: usize,
+    },
+    /// More polygons than `u32` ids can name.
+    TooMany,
+}
+
+impl fmt::Display for VisibilityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            VisibilityError::Corners { polygon, count } => {
+                write!(
+                    f,
+                    "polygon {polygon} has {count} corners; 3 or 4 are needed"
+                )
+            }
+            VisibilityError::NonFinite { polygon } => {
+                write!(
+                    f,
+                    "polygon {polygon} has a corner that is not a finite number"
+                )
+            }
+            VisibilityError::TooMany => f.write_str("too many polygons for 32-bit ids"),
+        }
+    }
+}
+
+impl std::error::Error for VisibilityError {}
+
+/// Ray-cast visibility over a fixed list of triangles and quads (a quad is tested as the
+/// triangles `a b c` and `a c d`). Polygon ids are indices into the list given to
+/// [`ObvhsVisibility::new`]. Immutable after construction, hence `Sync`.
+pub struct ObvhsVisibility {
+    /// `None` when there are no polygons.
+    bvh: Option<CwBvh>,
+    /// World corners; a triangle repeats its last corner in slot 3.
+    corners: Vec<[Vec3; 4]>,
+    /// 3 or 4 per polygon.
+    counts: Vec<u8>,
+    /// Centre of the normalised frame (m).
+    centre: Vec3,
+    /// World-to-normalised scale (1/m), a power of two.
+    inv_scale: f32,
+}
+
+impl fmt::Debug for ObvhsVisibility {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ObvhsVisibility")
+            .field("polygons", &self.corners.len())
+            .field("centre", &self.centre)
+            .field("inv_scale", &self.inv_scale)
+            .finish()
+    }
+}
+
+impl ObvhsVisibility {
+    /// Builds the BVH over `polygons` (world corners, 3 or 4 each; polygon id = index).
+    pub fn new<P: AsRef<[Vec3]>>(polygons: &[P]) -> Result<Self, VisibilityError> {
+        if polygons.len() >= u32::MAX as usize {
+            return Err(VisibilityError::TooMany);
+        }
+        let mut corners = Vec::with_capacity(polygons.len());
+        let mut counts = Vec::with_capacity(polygons.len());
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (polygon, p) in polygons.iter().enumerate() {
+            let p = p.as_ref();
+            if p.len() != 3 && p.len() != 4 {
+                return Err(VisibilityError::Corners {
+                    polygon,
+                    count: p.len(),
+                });
+            }
+            if p.iter().any(|c| !c.is_finite()) {
+                return Err(VisibilityError::NonFinite { polygon });
+            }
+            let mut c = [p[p.len() - 1]; 4];
+            c[..p.len()].copy_from_slice(p);
+            for v in p {
+                lo = lo.min(*v);
+                hi = hi.max(*v);
+            }
+            corners.push(c);
+            counts.push(p.len() as u8);
+        }
+        if corners.is_empty() {
+            return Ok(ObvhsVisibility {
+                bvh: None,
+                corners,
+                counts,
+                centre: Vec3::ZERO,
+                inv_scale: 1.0,
+            });
+        }
+        // Halve before subtracting so that opposite extremes near f32::MAX do not overflow.
+        let centre = lo * 0.5 + hi * 0.5;
+        let half = (hi * 0.5 - lo * 0.5).max_element();
+        let inv_scale = inv_power_of_two(half);
+        let boxes: Vec<BvhAabb> = corners
+            .iter()
+            .zip(&counts)
+            .map(|(c, &n)| {
+                let mut b = BvhAabb::INVALID;
+                for v in &c[..n as usize] {
+                    b.extend(Vec3A::from((*v - centre) * inv_scale));
+                }
+                BvhAabb::new(b.min - BOX_PAD, b.max + BOX_PAD)
+            })
+            .collect();
+        let bvh = build_cwbvh(
+            &boxes,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        Ok(ObvhsVisibility {
+            bvh: Some(bvh),
+            corners,
+            counts,
+            centre,
+            inv_scale,
+        })
+    }
+
+    /// Number of polygons.
+    pub fn len(&self) -> usize {
+        self.corners.len()
+    }
+
+    /// True when there are no polygons (nothing ever blocks).
+    pub fn is_empty(&self) -> bool {
+        self.corners.is_empty()
+    }
+
+    /// True when polygon `id` crosses the open segment `o + t d`, `T_MARGIN < t < 1 - T_MARGIN`.
+    fn blocks(&self, id: usize, o: DVec3, d: DVec3) -> bool {
+        let c = &self.corners[id];
+        let (a, b, cc) = (c[0].as_dvec3(), c[1].as_dvec3(), c[2].as_dvec3());
+        segment_crosses_triangle(o, d, a, b, cc)
+            || (self.counts[id] == 4 && segment_crosses_triangle(o, d, a, cc, c[3].as_dvec3()))
+    }
+}
+
+/// The smallest power of two `s` with `half * s <= 1` clamped to the normal f32 range,
+/// so that the normalised frame is an exact rescaling.
+fn inv_power_of_two(half: f32) -> f32 {
+    if !half.is_finite() || half <= 0.0 {
+        return 1.0;
+    }
+    let e = half.log2().ceil().clamp(-120.0, 120.0);
+    2f32.powi(-(e as i32))
+}
+
+/// Exact segment-triangle test in f64 (Moller-Trumbore): does the segment `o + t d` cross the
+/// triangle `a b c` (edges included) with `T_MARGIN < t < 1 - T_MARGIN`? A segment parallel
+/// to the triangle's plane never crosses it. No absolute tolerance.
+pub fn segment_crosses_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let s = o - a;
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    let t = e2.dot(q) * inv;
+    let m = T_MARGIN as f64;
+    t > m && t < 1.0 - m
+}
+
+impl Visibility for ObvhsVisibility {
+    /// 0.0 when a polygon not named in `skip` crosses the open segment (see [`T_MARGIN`]),
+    /// else 1.0. A degenerate or non-finite segment is never blocked.
+    fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
+        let Some(bvh) = &self.bvh else {
+            return 1.0;
+        };
+        let d = to - from;
+        if !from.is_finite() || !d.is_finite() || d == Vec3::ZERO {
+            return 1.0;
+        }
+        let origin = (from - self.centre) * self.inv_scale;
+        let dir = d * (self.inv_scale / RAY_STRETCH);
+        if !origin.is_finite() || dir == Vec3::ZERO {
+            // The segment is below f32 resolution in the normalised frame: test every
+            // polygon directly.
+            return self.brute_force(from, to, skip);
+        }
+        let ray = Ray::new(
+            Vec3A::from(origin),
+            Vec3A::from(dir),
+            0.0,
+            RAY_STRETCH * (1.0 - T_MARGIN),
+        );
+        let (o, dd) = (from.as_dvec3(), d.as_dvec3());
+        let clear = bvh.ray_traverse_miss(ray, |_, k| {
+            let id = bvh.primitive_indices[k];
+            if id != skip[0] && id != skip[1] && self.blocks(id as usize, o, dd) {
+                0.0
+            } else {
+                f32::INFINITY
+            }
+        });
+        if clear { 1.0 } else { 0.0 }
+    }
+}
+
+impl ObvhsVisibility {
+    /// The same answer as [`Visibility::transmittance`] by testing every polygon (no BVH):
+    /// the reference the BVH is checked against, and the fallback for segments too short for
+    /// the BVH's f32 frame.
+    pub fn brute_force(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
+        let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
+        let blocked = (0..self.corners.len())
+            .any(|id| id as u32 != skip[0] && id as u32 != skip[1] && self.blocks(id, o, d));
+        if blocked { 0.0 } else { 1.0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hirad_core::limits::NONE;
+    use hirad_core::sampling::hash3;
+
+    /// Deterministic numbers in [0, 1) for the random scenes.
+    struct Rng(u32, u32);
+
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.1 += 1;
+            (hash3(self.0, self.1, 0x5EED) >> 8) as f32 / 16_777_216.0
+        }
+        fn point(&mut self, size: f32) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next()) * size
+        }
+    }
+
+    /// A random scene of `n` small triangles and parallelograms in the cube [0, size]^3.
+    fn scene(seed: u32, n: usize, size: f32) -> Vec<Vec<Vec3>> {
+        let mut rng = Rng(seed, 0);
+        (0..n)
+            .map(|k| {
+                let a = rng.point(size);
+                let e1 = (rng.point(2.0) - 1.0) * size * 0.2;
+                let e2 = (rng.point(2.0) - 1.0) * size * 0.2;
+                if k % 2 == 0 {
+                    vec![a, a + e1, a + e2]
+                } else {
+                    vec![a, a + e1, a + e1 + e2, a + e2]
+                }
+            })
+            .collect()
+    }
+
+    /// Independent reference: the segment's crossing with each triangle's plane, then the
+    /// crossing point tested against the edges by signed volumes. `None` when the case is
+    /// too close to a boundary (t, or an edge) to compare two different formulations.
+    fn reference(polys: &[Vec<Vec3>], from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<f32> {
+        let (o, e) = (from.as_dvec3(), to.as_dvec3());
+        let mut blocked = false;
+        for (id, p) in polys.iter().enumerate() {
+            if skip.contains(&(id as u32)) {
+                continue;
+            }
+            let tris: &[[usize; 3]] = if p.len() == 4 {
+                &[[0, 1, 2], [0, 2, 3]]
+            } else {
+                &[[0, 1, 2]]
+            };
+            for t in tris {
+                let (a, b, c) = (p[t[0]].as_dvec3(), p[t[1]].as_dvec3(), p[t[2]].as_dvec3());
+                let n = (b - a).cross(c - a);
+                let (so, se) = (n.dot(o - a), n.dot(e - a));
+                if so == se || (so > 0.0) == (se > 0.0) && so != 0.0 && se != 0.0 {
+                    continue;
+                }
+                let t = so / (so - se);
+                let m = T_MARGIN as f64;
+                if (t - m).abs() < 1e-4 || (t - (1.0 - m)).abs() < 1e-4 {
+                    return None;
+                }
+                if t <= m || t >= 1.0 - m {
+                    continue;
+                }
+                let x = o + (e - o) * t;
+                let w = [
+                    (b - a).cross(x - a).dot(n),
+                    (c - b).cross(x - b).dot(n),
+                    (a - c).cross(x - c).dot(n),
+                ];
+                let scale = n.length_squared();
+                if w.iter().any(|v| v.abs() < 1e-6 * scale) {
+                    return None;
+                }
+                if w.iter().all(|v| *v > 0.0) {
+                    blocked = true;
+                }
+            }
+        }
+        Some(if blocked { 0.0 } else { 1.0 })
+    }
+
+    fn compare(seed: u32, size: f32) -> (usize, usize) {
+        let polys = scene(seed, 200, size);
+        let vis = ObvhsVisibility::new(&polys).unwrap();
+        let mut rng = Rng(seed ^ 0xABCD, 1_000_000);
+        let (mut compared, mut blocked) = (0, 0);
+        for k in 0..2000u32 {
+            // Half the segments start and end on polygons (skipped), half are free.
+            let (from, to, skip) = if k % 2 == 0 {
+                let (i, j) = (k as usize % polys.len(), (k as usize * 7 + 3) % polys.len());
+                let pi = &polys[i];
+                let pj = &polys[j];
+                let from = (pi[0] + pi[1] + pi[2]) / 3.0;
+                let to = (pj[0] + pj[1] + pj[2]) / 3.0;
+                (from, to, [i as u32, j as u32])
+            } else {
+                (rng.point(size), rng.point(size), [NONE, NONE])
+            };
+            let fast = vis.transmittance(from, to, skip);
+            assert_eq!(fast, vis.brute_force(from, to, skip), "seed {seed} ray {k}");
+            if let Some(r) = reference(&polys, from, to, skip) {
+                assert_eq!(fast, r, "seed {seed} ray {k} size {size}");
+                compared += 1;
+                blocked += (fast == 0.0) as usize;
+            }
+        }
+        (compared, blocked)
+    }
+
+    #[test]
+    fn agrees_with_brute_force_on_random_scenes_at_any_scale() {
+        for seed in 0..4 {
+            for size in [1.0, 1e-3, 1e3] {
+                let (compared, blocked) = compare(seed, size);
+                // Nearly every case is comparable, and both outcomes occur often.
+                assert!(compared > 1900, "{compared}");
+                assert!(blocked > 200 && blocked < compared - 200, "{blocked}");
+            }
+        }
+    }
+
+    #[test]
+    fn same_answer_in_millimetres_and_kilometres() {
+        let polys = scene(9, 100, 1.0);
+        let scaled = |s: f32| -> Vec<Vec<Vec3>> {
+            polys
+                .iter()
+                .map(|p| p.iter().map(|v| *v * s).collect())
+                .collect()
+        };
+        let (small, big) = (scaled(1.0 / 1024.0), scaled(1024.0));
+        let (vs, vb) = (
+            ObvhsVisibility::new(&small).unwrap(),
+            ObvhsVisibility::new(&big).unwrap(),
+        );
+        let v1 = ObvhsVisibility::new(&polys).unwrap();
+        let mut rng = Rng(77, 0);
+        for _ in 0..2000 {
+            let (a, b) = (rng.point(1.0), rng.point(1.0));
+            let r = v1.transmittance(a, b, [NONE, NONE]);
+            // Powers of two scale exactly, so the answers are identical.
+            assert_eq!(vs.transmittance(a / 1024.0, b / 1024.0, [NONE, NONE]), r);
+            assert_eq!(vb.transmittance(a * 1024.0, b * 1024.0, [NONE, NONE]), r);
+        }
+    }
+
+    #[test]
+    fn margins_are_relative_to_the_segment() {
+        // A unit square in z = 0, and segments crossing it at chosen parameters.
+        let sq = vec![vec![
+            Vec3::new(-1., -1., 0.),
+            Vec3::new(1., -1., 0.),
+            Vec3::new(1., 1., 0.),
+            Vec3::new(-1., 1., 0.),
+        ]];
+        let v = ObvhsVisibility::new(&sq).unwrap();
+        let none = [NONE, NONE];
+        for len in [1e-3f32, 1.0, 1e3] {
+            let seg = |t_cross: f32| {
+                let from = Vec3::new(0.1, 0.2, -t_cross * len);
+                (from, from + Vec3::new(0.0, 0.0, len))
+            };
+            for (t, expect) in [
+                (0.5, 0.0),
+                (1.1e-5, 0.0),
+                (1.0 - 1.1e-5, 0.0),
+                (5e-6, 1.0),
+                (1.0 - 5e-6, 1.0),
+            ] {
+                let (a, b) = seg(t);
+                assert_eq!(v.transmittance(a, b, none), expect, "t {t} len {len}");
+            }
+        }
+        // The skipped polygon never blocks; a segment beside the square is clear.
+        let (a, b) = (Vec3::new(0., 0., -1.), Vec3::new(0., 0., 1.));
+        assert_eq!(v.transmittance(a, b, [0, NONE]), 1.0);
+        assert_eq!(v.transmittance(a, b, [NONE, 0]), 1.0);
+        assert_eq!(v.transmittance(a, b, none), 0.0);
+        let (a, b) = (Vec3::new(1.5, 0., -1.), Vec3::new(1.5, 0., 1.));
+        assert_eq!(v.transmittance(a, b, none), 1.0);
+        // Through the quad's diagonal (where its two triangles meet): blocked.
+        let (a, b) = (Vec3::new(0.3, 0.3, -1.), Vec3::new(0.3, 0.3, 1.));
+        assert_eq!(v.transmittance(a, b, none), 0.0);
+        // In the plane of the square: never blocked.
+        let (a, b) = (Vec3::new(-2., 0., 0.), Vec3::new(2., 0., 0.));
+        assert_eq!(v.transmittance(a, b, none), 1.0);
+    }
+
+    #[test]
+    fn empty_one_polygon_and_bad_input() {
+        let empty: Vec<Vec<Vec3>> = Vec::new();
+        let v = ObvhsVisibility::new(&empty).unwrap();
+        assert!(v.is_empty());
+        assert_eq!(v.transmittance(Vec3::ZERO, Vec3::ONE, [NONE, NONE]), 1.0);
+        let tri = vec![vec![
+            Vec3::new(0., 0., 1.),
+            Vec3::new(1., 0., 1.),
+            Vec3::new(0., 1., 1.),
+        ]];
+        let v = ObvhsVisibility::new(&tri).unwrap();
+        assert_eq!(v.len(), 1);
+        let p = Vec3::new(0.2, 0.2, 0.0);
+        assert_eq!(v.transmittance(p, p + Vec3::Z * 2.0, [NONE, NONE]), 0.0);
+        assert_eq!(v.transmittance(p, p, [NONE, NONE]), 1.0);
+        let nan = Vec3::splat(f32::NAN);
+        assert_eq!(v.transmittance(nan, p, [NONE, NONE]), 1.0);
+        let bad = vec![vec![Vec3::ZERO, Vec3::X]];
+        assert_eq!(
+            ObvhsVisibility::new(&bad).unwrap_err(),
+            VisibilityError::Corners {
+                polygon: 0,
+                count: 2
+            }
+        );
+        let bad = vec![vec![Vec3::ZERO, Vec3::X, nan]];
+        assert_eq!(
+            ObvhsVisibility::new(&bad).unwrap_err(),
+            VisibilityError::NonFinite { polygon: 0 }
+        );
+    }
+
+    #[test]
+    fn shared_across_threads() {
+        fn is_sync<T: Sync + Send>() {}
+        is_sync::<ObvhsVisibility>();
+    }
+}
