@@ -4,6 +4,7 @@
 pub mod cli;
 pub mod files;
 pub mod obj;
+pub mod output;
 pub mod scene;
 pub mod text;
 pub mod visibility;

@@ -1,0 +1,113 @@
+//! The `--image` output: a [`Sink`] that rasterises leaf patches as they stream by and, when
+//! the solve is done, writes a linear f32 EXR (`.exr`) or an 8-bit sRGB preview (`.png`)
+//! through a temporary file renamed into place.
+
+use super::camera::Size;
+use super::exr_file::write_exr;
+use super::frame::{Frame, channel_names};
+use super::png_file::write_png;
+use super::raster::Rasterizer;
+use crate::files::{persist, temp_beside};
+use crate::scene::Camera;
+use anyhow::{anyhow, bail};
+use hirad_core::sink::{PatchResult, PolygonResult, Sink};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The image file formats, chosen by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// `.exr`: linear radiance, f32 per band.
+    Exr,
+    /// `.png`: 8-bit sRGB tone-mapped preview.
+    Png,
+}
+
+impl ImageFormat {
+    /// The format named by a path's extension (case-insensitive).
+    pub fn of(path: &Path) -> anyhow::Result<ImageFormat> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("exr") => Ok(ImageFormat::Exr),
+            Some("png") => Ok(ImageFormat::Png),
+            _ => bail!(
+                "{}: unknown image format; expected an .exr or .png file",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// An image being rendered into memory, written to its file by [`ImageSink::finish`].
+#[derive(Clone, Debug)]
+pub struct ImageSink {
+    path: PathBuf,
+    format: ImageFormat,
+    raster: Rasterizer,
+    channels: Vec<String>,
+}
+
+impl ImageSink {
+    /// An image for `path` (`.exr` or `.png`, checked now so that a long solve does not end
+    /// in a refusal) of `size` pixels from a checked `camera`, with `supersample x
+    /// supersample` samples per pixel, for a scene of `bands` bands named `band_names`.
+    pub fn new(
+        path: &Path,
+        camera: &Camera,
+        size: Size,
+        supersample: u32,
+        bands: usize,
+        band_names: &[String],
+    ) -> anyhow::Result<Self> {
+        let format = ImageFormat::of(path)?;
+        let raster = Rasterizer::new(camera, size, supersample, bands)
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        Ok(ImageSink {
+            path: path.to_path_buf(),
+            format,
+            raster,
+            channels: channel_names(bands, band_names),
+        })
+    }
+
+    /// The image as rendered so far (linear radiance, W/m^2/sr).
+    pub fn frame(&self) -> Frame {
+        self.raster.frame(self.channels.clone())
+    }
+
+    /// Writes the file: a temporary name beside it, renamed into place when complete.
+    pub fn finish(self) -> anyhow::Result<()> {
+        let frame = self.frame();
+        let path = &self.path;
+        let tmp = temp_beside(path)?;
+        let mut w = BufWriter::new(tmp);
+        match self.format {
+            ImageFormat::Exr => write_exr(&frame, &mut w),
+            ImageFormat::Png => write_png(&frame, &mut w),
+        }
+        .map_err(|e| anyhow!("{}: {e:#}", path.display()))?;
+        w.flush()
+            .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))?;
+        let tmp = w
+            .into_inner()
+            .map_err(|e| anyhow!("{}: cannot write: {}", path.display(), e.error()))?;
+        persist(tmp, path)
+    }
+}
+
+impl Sink for ImageSink {
+    type Error = anyhow::Error;
+
+    fn patch(&mut self, patch: &PatchResult<'_>) -> anyhow::Result<()> {
+        self.raster
+            .patch(patch)
+            .map_err(|e| anyhow!("{}: {e}", self.path.display()))
+    }
+
+    fn polygon(&mut self, _: &PolygonResult<'_>) -> anyhow::Result<()> {
+        Ok(())
+    }
+}

@@ -1,0 +1,48 @@
+//! Everything a solve writes and reads besides the solver: the per-polygon results table
+//! (CSV) and its reader, the error against a reference table, images rasterised as patches
+//! stream by (EXR, PNG), the stats report, and progress on stderr.
+//!
+//! Units: m^2 for areas, W/m^2 for radiosity and irradiance, W/m^2/sr (radiosity / pi) for
+//! image radiance.
+
+pub mod camera;
+pub mod exr_file;
+pub mod frame;
+pub mod image;
+pub mod outputs;
+pub mod png_file;
+pub mod progress;
+pub mod raster;
+pub mod reference;
+pub mod results;
+pub mod results_read;
+pub mod stats;
+
+pub use camera::{
+    OptionError, Projection, Size, check_camera, default_camera, parse_camera, parse_size,
+    scene_bounds,
+};
+pub use exr_file::{read_exr, write_exr};
+pub use frame::{Frame, channel_names};
+pub use image::{ImageFormat, ImageSink};
+pub use outputs::Outputs;
+pub use png_file::{tone_map, write_png};
+pub use progress::Progress;
+pub use raster::Rasterizer;
+pub use reference::{CompareError, Comparison, ReferenceSink, compare};
+pub use results::{ResultsFile, ResultsTable, ResultsWriter};
+pub use results_read::{TableError, read_results};
+pub use stats::SolveReport;
+
+#[cfg(test)]
+mod tests_camera;
+#[cfg(test)]
+mod tests_image;
+#[cfg(test)]
+mod tests_progress;
+#[cfg(test)]
+mod tests_reference;
+#[cfg(test)]
+mod tests_results;
+#[cfg(test)]
+mod tests_stats;

@@ -1,0 +1,91 @@
+//! An 8-bit sRGB PNG preview of a linear image.
+//!
+//! Operator: linear exposure, then clipping, then the sRGB transfer curve. The exposure is
+//! automatic: the 99th percentile of the luminance (Rec. 709 weights) of the lit pixels maps
+//! to 0.9, so the brightest 1 % may clip. Bands become display colours first: 1 band is grey;
+//! 2 bands (PAR, NIR) are false colour, red = band 1 and green = blue = band 0 (so light of
+//! equal bands is grey, band 0 alone cyan, band 1 alone red, as in colour-infrared
+//! pictures); 3 bands are R, G, B; more than 3 show the first three as R, G, B.
+
+use super::frame::Frame;
+use anyhow::anyhow;
+use std::io::Write;
+
+/// Luminance percentile that sets the exposure.
+pub const EXPOSURE_PERCENTILE: f64 = 0.99;
+
+/// Display value the percentile luminance maps to.
+pub const EXPOSURE_TARGET: f32 = 0.9;
+
+/// Linear display colour of one pixel.
+fn display_rgb(px: &[f32]) -> [f32; 3] {
+    match *px {
+        [y] => [y, y, y],
+        [par, nir] => [nir, par, par],
+        [r, g, b, ..] => [r, g, b],
+        [] => [0.0; 3],
+    }
+}
+
+fn luminance([r, g, b]: [f32; 3]) -> f32 {
+    0.2126 * r + 0.7152 * g + 0.0722 * b
+}
+
+/// The exposure scale: [`EXPOSURE_TARGET`] over the [`EXPOSURE_PERCENTILE`] luminance of the
+/// pixels with positive luminance; 1 when no pixel is lit.
+pub fn exposure(frame: &Frame) -> f32 {
+    let n = frame.channels.len().max(1);
+    let mut lit: Vec<f32> = frame
+        .data
+        .chunks(n)
+        .map(|px| luminance(display_rgb(px)))
+        .filter(|&l| l > 0.0 && l.is_finite())
+        .collect();
+    if lit.is_empty() {
+        return 1.0;
+    }
+    let k = ((lit.len() - 1) as f64 * EXPOSURE_PERCENTILE).floor() as usize;
+    let (_, &mut at, _) = lit.select_nth_unstable_by(k, f32::total_cmp);
+    EXPOSURE_TARGET / at
+}
+
+/// The sRGB transfer curve of a linear value in [0, 1].
+pub fn srgb_encode(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// 8-bit sRGB pixels (R, G, B, row by row from the top left) of the tone-mapped frame.
+pub fn tone_map(frame: &Frame) -> Vec<u8> {
+    let n = frame.channels.len().max(1);
+    let scale = exposure(frame);
+    let mut out = Vec::with_capacity(frame.data.len() / n * 3);
+    for px in frame.data.chunks(n) {
+        for v in display_rgb(px) {
+            let linear = (v * scale).clamp(0.0, 1.0);
+            // NaN clamps to NaN and casts to 0.
+            out.push((srgb_encode(linear) * 255.0 + 0.5) as u8);
+        }
+    }
+    out
+}
+
+/// Writes the tone-mapped frame as an 8-bit RGB PNG marked as sRGB.
+pub fn write_png(frame: &Frame, out: impl Write) -> anyhow::Result<()> {
+    let mut encoder = png::Encoder::new(out, frame.width, frame.height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let mut writer = encoder
+        .write_header()
+        .map_err(|e| anyhow!("cannot write the PNG image: {e}"))?;
+    writer
+        .write_image_data(&tone_map(frame))
+        .map_err(|e| anyhow!("cannot write the PNG image: {e}"))?;
+    writer
+        .finish()
+        .map_err(|e| anyhow!("cannot write the PNG image: {e}"))
+}

@@ -1,0 +1,263 @@
+//! Error against a reference solution, the paper's measure (Soler & Sillion 2000, Figure 4):
+//! the L2 difference of per-polygon radiosity, area-weighted, in percent of the reference's
+//! largest radiosity:
+//!
+//! `100 * sqrt( sum_i sum_c A_i (B_ic - R_ic)^2 / (n_c * sum_i A_i) ) / max_ic R_ic`
+//!
+//! over the columns `c`: every band of the front radiosity, and of the back radiosity when
+//! both tables have back columns (then one-sided polygons count with their back at 0 on both
+//! sides). The areas `A_i` are the reference's. Sums run in f64 in id order, so the result
+//! is deterministic.
+
+use super::results::ResultsTable;
+use hirad_core::sink::{PolygonResult, Sink};
+use std::fmt;
+
+/// Largest relative difference between a polygon's area in the results and in the reference
+/// before the two are declared different scenes.
+pub const AREA_TOLERANCE: f64 = 1e-3;
+
+/// How far a solution is from the reference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Comparison {
+    /// The paper's error (percent of the reference's largest radiosity).
+    pub error_percent: f64,
+    /// The same measure for each band alone (front and back together), with the same
+    /// normaliser; `error_percent^2` is the mean of their squares.
+    pub per_band_percent: Vec<f64>,
+    /// Largest absolute radiosity difference over every polygon and compared column (W/m^2).
+    pub max_abs_difference: f64,
+    /// The reference's largest radiosity over the compared columns (W/m^2).
+    pub reference_max: f64,
+    /// Polygons compared.
+    pub polygons: u64,
+    /// True when back-side radiosity was compared too.
+    pub back_compared: bool,
+}
+
+/// Why two tables cannot be compared.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CompareError(pub String);
+
+impl fmt::Display for CompareError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CompareError {}
+
+fn refuse<T>(message: String) -> Result<T, CompareError> {
+    Err(CompareError(message))
+}
+
+/// Running sums of the measure, fed one polygon at a time in id order.
+#[derive(Clone, Debug)]
+struct Accumulator {
+    sides: usize,
+    area: f64,
+    squares: Vec<f64>,
+    max_abs: f64,
+    max_ref: f64,
+    polygons: u64,
+}
+
+impl Accumulator {
+    fn new(bands: usize, back: bool) -> Self {
+        Accumulator {
+            sides: if back { 2 } else { 1 },
+            area: 0.0,
+            squares: vec![0.0; bands],
+            max_abs: 0.0,
+            max_ref: f64::NEG_INFINITY,
+            polygons: 0,
+        }
+    }
+
+    /// Adds one polygon: reference area, result and reference radiosity per side (an empty
+    /// slice stands for zeros).
+    fn add(&mut self, area: f32, result: [&[f32]; 2], reference: [&[f32]; 2]) {
+        let area = f64::from(area);
+        self.area += area;
+        self.polygons += 1;
+        for side in 0..self.sides {
+            for (b, sum) in self.squares.iter_mut().enumerate() {
+                let got = f64::from(result[side].get(b).copied().unwrap_or(0.0));
+                let want = f64::from(reference[side].get(b).copied().unwrap_or(0.0));
+                let d = got - want;
+                *sum += area * d * d;
+                self.max_abs = self.max_abs.max(d.abs());
+                self.max_ref = self.max_ref.max(want);
+            }
+        }
+    }
+
+    fn finish(self) -> Result<Comparison, CompareError> {
+        if self.polygons == 0 {
+            return refuse("the reference has no polygons".into());
+        }
+        if self.area.is_nan() || self.area <= 0.0 {
+            return refuse("the reference's polygons have no area".into());
+        }
+        if self.max_ref.is_nan() || self.max_ref <= 0.0 {
+            return refuse(format!(
+                "the reference's largest radiosity is {} W/m^2: an error in percent of it \
+                 is undefined",
+                self.max_ref
+            ));
+        }
+        let bands = self.squares.len() as f64;
+        let sides = self.sides as f64;
+        let percent =
+            |sum: f64, columns: f64| 100.0 * (sum / (columns * self.area)).sqrt() / self.max_ref;
+        let total: f64 = self.squares.iter().sum();
+        Ok(Comparison {
+            error_percent: percent(total, bands * sides),
+            per_band_percent: self.squares.iter().map(|&s| percent(s, sides)).collect(),
+            max_abs_difference: self.max_abs,
+            reference_max: self.max_ref,
+            polygons: self.polygons,
+            back_compared: self.sides == 2,
+        })
+    }
+}
+
+fn check_bands(bands: usize, reference: &ResultsTable) -> Result<(), CompareError> {
+    if bands != reference.bands {
+        return refuse(format!(
+            "the results have {bands} band{} but the reference has {}",
+            plural(bands),
+            reference.bands
+        ));
+    }
+    Ok(())
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// Refuses a row whose id or area does not match the reference's row.
+fn check_row(row: usize, id: u64, area: f32, reference: &ResultsTable) -> Result<(), CompareError> {
+    let want = reference.ids[row];
+    if id != want {
+        return refuse(format!(
+            "row {}: polygon {id} in the results but polygon {want} in the reference",
+            row + 1
+        ));
+    }
+    let (a, r) = (f64::from(area), f64::from(reference.areas[row]));
+    if (a - r).abs() > AREA_TOLERANCE * a.max(r) {
+        return refuse(format!(
+            "polygon {id}: area {area} m^2 in the results but {} m^2 in the reference: not \
+             the same scene",
+            reference.areas[row]
+        ));
+    }
+    Ok(())
+}
+
+/// Compares two tables of the same scene. Refuses different band counts, polygon counts,
+/// ids, or areas (beyond [`AREA_TOLERANCE`]), and a reference whose radiosity is nowhere
+/// positive.
+pub fn compare(
+    result: &ResultsTable,
+    reference: &ResultsTable,
+) -> Result<Comparison, CompareError> {
+    check_bands(result.bands, reference)?;
+    if result.len() != reference.len() {
+        return refuse(format!(
+            "the results have {} polygons but the reference has {}",
+            result.len(),
+            reference.len()
+        ));
+    }
+    let back = result.two_sided && reference.two_sided;
+    let mut acc = Accumulator::new(reference.bands, back);
+    for row in 0..reference.len() {
+        check_row(row, result.ids[row], result.areas[row], reference)?;
+        acc.add(
+            reference.areas[row],
+            [result.radiosity(row, 0), result.radiosity(row, 1)],
+            [reference.radiosity(row, 0), reference.radiosity(row, 1)],
+        );
+    }
+    acc.finish()
+}
+
+/// Compares polygons against a reference as the solver hands them over, so that the
+/// solution never has to be held: a [`Sink`] whose [`ReferenceSink::finish`] gives the
+/// same [`Comparison`] as [`compare`] on the whole table.
+#[derive(Clone, Debug)]
+pub struct ReferenceSink {
+    reference: ResultsTable,
+    next: usize,
+    acc: Accumulator,
+}
+
+impl ReferenceSink {
+    /// A comparison against `reference` for results with `bands` bands, with back-side
+    /// values when `two_sided` (the scene has two-sided materials).
+    pub fn new(
+        reference: ResultsTable,
+        bands: usize,
+        two_sided: bool,
+    ) -> Result<Self, CompareError> {
+        check_bands(bands, &reference)?;
+        let acc = Accumulator::new(bands, two_sided && reference.two_sided);
+        Ok(ReferenceSink {
+            reference,
+            next: 0,
+            acc,
+        })
+    }
+
+    /// The comparison; refuses a solution with fewer polygons than the reference.
+    pub fn finish(self) -> Result<Comparison, CompareError> {
+        if self.next != self.reference.len() {
+            return refuse(format!(
+                "the results have {} polygons but the reference has {}",
+                self.next,
+                self.reference.len()
+            ));
+        }
+        self.acc.finish()
+    }
+}
+
+impl Sink for ReferenceSink {
+    type Error = CompareError;
+
+    fn polygon(&mut self, p: &PolygonResult<'_>) -> Result<(), CompareError> {
+        let row = self.next;
+        if row >= self.reference.len() {
+            return refuse(format!(
+                "the results have more polygons than the reference's {} (polygon {})",
+                self.reference.len(),
+                p.id
+            ));
+        }
+        check_row(row, p.id, p.area, &self.reference)?;
+        for side in 0..self.acc.sides {
+            let n = p.radiosity[side].len();
+            let missing_back = side == 1 && n == 0;
+            if n != self.reference.bands && !missing_back {
+                return refuse(format!(
+                    "polygon {}: {n} radiosity values for {} bands",
+                    p.id, self.reference.bands
+                ));
+            }
+            if p.radiosity[side].iter().any(|v| !v.is_finite()) {
+                return refuse(format!("polygon {}: radiosity is not finite", p.id));
+            }
+        }
+        let r = &self.reference;
+        self.acc.add(
+            r.areas[row],
+            p.radiosity,
+            [r.radiosity(row, 0), r.radiosity(row, 1)],
+        );
+        self.next += 1;
+        Ok(())
+    }
+}

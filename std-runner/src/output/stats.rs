@@ -1,0 +1,141 @@
+//! What a solve did and what it cost (design principle 6): the `--stats` JSON object and the
+//! summary printed on stderr after every run.
+
+use super::reference::Comparison;
+use crate::files::write_atomic;
+use serde::{Deserialize, Serialize};
+use std::io::{self, Write};
+use std::path::Path;
+
+/// Settings, counts, time, memory and error of one solve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolveReport {
+    /// Solver: `hr` (hierarchical with instantiation) or `exact`.
+    pub method: String,
+    /// Refinement threshold epsilon (W, transfer error per link).
+    pub epsilon: f64,
+    /// Worker threads.
+    pub threads: u32,
+    /// Polygons of the expanded scene (rows of the results table).
+    pub polygons: u64,
+    /// Elements (clusters, polygons and sub-patches) created, summed over all levels.
+    pub elements: u64,
+    /// Links created, summed over all levels.
+    pub links: u64,
+    /// Gather / push-pull iterations, summed over all levels.
+    pub iterations: u64,
+    /// Refinement passes, summed over all levels.
+    pub refinement_passes: u64,
+    /// Wall-clock time of the solve (s).
+    pub seconds: f64,
+    /// Most bytes of the workspace in use at once.
+    pub peak_workspace_bytes: u64,
+    /// Size of the workspace the solve was given (bytes).
+    pub workspace_bytes: u64,
+    /// True when a full pool stopped refinement: the result is coarser than epsilon asked.
+    pub budget_limited: bool,
+    /// Error against the reference (percent of its largest radiosity; see
+    /// [`super::reference`]); `null` without a reference.
+    pub error_percent: Option<f64>,
+    /// The same error per band; empty without a reference.
+    #[serde(default)]
+    pub error_per_band_percent: Vec<f64>,
+    /// Largest absolute radiosity difference from the reference (W/m^2); `null` without one.
+    #[serde(default)]
+    pub max_abs_difference: Option<f64>,
+}
+
+impl SolveReport {
+    /// Records a comparison against a reference.
+    pub fn set_comparison(&mut self, c: &Comparison) {
+        self.error_percent = Some(c.error_percent);
+        self.error_per_band_percent = c.per_band_percent.clone();
+        self.max_abs_difference = Some(c.max_abs_difference);
+    }
+
+    /// The report as one pretty-printed JSON object.
+    pub fn to_json(&self) -> String {
+        // Serialising plain numbers, strings and options cannot fail; non-finite numbers
+        // become null.
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"))
+    }
+
+    /// Parses a report written by [`SolveReport::to_json`].
+    pub fn from_json(text: &str) -> serde_json::Result<Self> {
+        serde_json::from_str(text)
+    }
+
+    /// Writes the JSON object (and a final newline) to `path` atomically.
+    pub fn write_json(&self, path: &Path) -> anyhow::Result<()> {
+        let json = self.to_json();
+        write_atomic(path, |w| {
+            w.write_all(json.as_bytes())?;
+            w.write_all(b"\n")?;
+            Ok(())
+        })
+    }
+
+    /// The human summary: settings, time, peak memory, links, elements and error.
+    pub fn print_summary(&self, out: &mut dyn Write) -> io::Result<()> {
+        writeln!(
+            out,
+            "solve: method {}, epsilon {}, {} thread{}, workspace {}",
+            self.method,
+            self.epsilon,
+            self.threads,
+            if self.threads == 1 { "" } else { "s" },
+            bytes(self.workspace_bytes)
+        )?;
+        writeln!(
+            out,
+            "  time {:.3} s, peak memory {} of the workspace",
+            self.seconds,
+            bytes(self.peak_workspace_bytes)
+        )?;
+        writeln!(
+            out,
+            "  {} polygons, {} elements, {} links, {} iterations, {} refinement passes",
+            self.polygons, self.elements, self.links, self.iterations, self.refinement_passes
+        )?;
+        if self.budget_limited {
+            writeln!(
+                out,
+                "  the memory budget limited refinement: the result is coarser than epsilon asked"
+            )?;
+        }
+        match self.error_percent {
+            Some(e) => {
+                write!(out, "  error {e:.4} % of the reference's largest radiosity")?;
+                if self.error_per_band_percent.len() > 1 {
+                    let bands: Vec<String> = self
+                        .error_per_band_percent
+                        .iter()
+                        .map(|b| format!("{b:.4}"))
+                        .collect();
+                    write!(out, " (per band {} %)", bands.join(", "))?;
+                }
+                if let Some(m) = self.max_abs_difference {
+                    write!(out, "; largest difference {m} W/m^2")?;
+                }
+                writeln!(out)
+            }
+            None => writeln!(out, "  error: no reference given"),
+        }
+    }
+}
+
+/// A byte count for people: B, KiB, MiB or GiB.
+pub fn bytes(n: u64) -> String {
+    const UNITS: [&str; 4] = ["B", "KiB", "MiB", "GiB"];
+    let mut value = n as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{n} B")
+    } else {
+        format!("{value:.1} {}", UNITS[unit])
+    }
+}

@@ -1,0 +1,80 @@
+//! The progress line: its text, its timing, and silence when disabled.
+
+use super::progress::{Progress, line};
+use std::io::Write;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+#[derive(Clone, Default)]
+struct Shared(Arc<Mutex<Vec<u8>>>);
+
+impl Write for Shared {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Shared {
+    fn text(&self) -> String {
+        String::from_utf8(self.0.lock().unwrap().clone()).unwrap()
+    }
+}
+
+#[test]
+fn line_text() {
+    let l = line("gather", 5, Some(10), Duration::from_millis(2500));
+    assert_eq!(
+        l,
+        format!(
+            "gather [{}{}] 5/10  50% 2.5 s",
+            "#".repeat(15),
+            "-".repeat(15)
+        )
+    );
+    assert_eq!(
+        line("refine", 12, None, Duration::from_secs(3)),
+        "refine: 12, 3.0 s"
+    );
+    assert!(line("x", 3, Some(0), Duration::ZERO).contains("100%"));
+    assert!(line("x", 30, Some(10), Duration::ZERO).contains("100%"));
+}
+
+#[test]
+fn silent_first_second_then_at_most_ten_redraws_a_second() {
+    let out = Shared::default();
+    // Taken before the reporter starts, so that `t0 + d` is at most `d` into its run.
+    let t0 = Instant::now();
+    let p = Progress::with_output(true, Box::new(out.clone()));
+    p.phase("solve", Some(100));
+    p.set_at(1, t0 + Duration::from_millis(500));
+    assert_eq!(out.text(), "");
+    p.set_at(2, t0 + Duration::from_millis(1200));
+    assert!(out.text().contains("2/100"), "{}", out.text());
+    p.set_at(3, t0 + Duration::from_millis(1250));
+    assert!(!out.text().contains("3/100"));
+    p.set_at(4, t0 + Duration::from_millis(1400));
+    assert!(out.text().contains("4/100"));
+    p.finish();
+    assert!(out.text().ends_with("\r\x1b[2K"));
+    let before = out.text().len();
+    p.finish();
+    drop(p);
+    assert_eq!(out.text().len(), before, "the line is cleared once");
+}
+
+#[test]
+fn disabled_shows_nothing() {
+    let out = Shared::default();
+    let p = Progress::with_output(false, Box::new(out.clone()));
+    p.phase("solve", None);
+    p.set_at(5, Instant::now() + Duration::from_secs(5));
+    p.advance(3);
+    p.finish();
+    assert!(!p.enabled());
+    assert_eq!(out.text(), "");
+    assert!(!Progress::new(true).enabled(), "quiet disables it");
+}

@@ -1,0 +1,116 @@
+//! The stats report: JSON round trip with every field, and the summary text.
+
+use super::reference::Comparison;
+use super::stats::{SolveReport, bytes};
+
+fn report() -> SolveReport {
+    SolveReport {
+        method: "hr".into(),
+        epsilon: 0.001,
+        threads: 4,
+        polygons: 17,
+        elements: 1234,
+        links: 56789,
+        iterations: 12,
+        refinement_passes: 3,
+        seconds: 1.5,
+        peak_workspace_bytes: 3 << 20,
+        workspace_bytes: 64 << 20,
+        budget_limited: true,
+        error_percent: None,
+        error_per_band_percent: Vec::new(),
+        max_abs_difference: None,
+    }
+}
+
+#[test]
+fn json_round_trip_holds_every_field() {
+    let mut r = report();
+    let text = r.to_json();
+    for field in [
+        "method",
+        "epsilon",
+        "threads",
+        "polygons",
+        "elements",
+        "links",
+        "iterations",
+        "refinement_passes",
+        "seconds",
+        "peak_workspace_bytes",
+        "workspace_bytes",
+        "budget_limited",
+        "error_percent",
+        "error_per_band_percent",
+        "max_abs_difference",
+    ] {
+        assert!(
+            text.contains(&format!("\"{field}\":")),
+            "{field} missing in {text}"
+        );
+    }
+    assert!(text.contains("\"error_percent\": null"), "{text}");
+    assert_eq!(SolveReport::from_json(&text).unwrap(), r);
+
+    r.set_comparison(&Comparison {
+        error_percent: 1.25,
+        per_band_percent: vec![1.0, 1.5],
+        max_abs_difference: 0.5,
+        reference_max: 10.0,
+        polygons: 17,
+        back_compared: false,
+    });
+    let text = r.to_json();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["error_percent"], 1.25);
+    assert_eq!(v["links"], 56789);
+    assert_eq!(v["budget_limited"], true);
+    assert_eq!(SolveReport::from_json(&text).unwrap(), r);
+}
+
+#[test]
+fn json_file_is_written_atomically() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("stats.json");
+    report().write_json(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(SolveReport::from_json(&text).unwrap(), report());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn summary_names_settings_cost_and_error() {
+    let mut r = report();
+    let mut out = Vec::new();
+    r.print_summary(&mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    for word in [
+        "method hr",
+        "epsilon 0.001",
+        "4 threads",
+        "64.0 MiB",
+        "time 1.500 s",
+        "peak memory 3.0 MiB",
+        "1234 elements",
+        "56789 links",
+        "budget limited",
+        "no reference",
+    ] {
+        assert!(text.contains(word), "`{word}` missing in {text}");
+    }
+    r.error_percent = Some(0.5);
+    r.error_per_band_percent = vec![0.25, 0.75];
+    let mut out = Vec::new();
+    r.print_summary(&mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    assert!(text.contains("error 0.5000 %"), "{text}");
+    assert!(text.contains("per band 0.2500, 0.7500 %"), "{text}");
+}
+
+#[test]
+fn byte_counts() {
+    assert_eq!(bytes(0), "0 B");
+    assert_eq!(bytes(1023), "1023 B");
+    assert_eq!(bytes(1536), "1.5 KiB");
+    assert_eq!(bytes(5 << 30), "5.0 GiB");
+}
