@@ -17,6 +17,7 @@ compile_error!(
     "hirad-core reads little-endian scene images in place; big-endian hosts are not supported yet"
 );
 
+pub mod bvh;
 pub mod formfactor;
 pub mod geometry;
 pub mod handles;
