@@ -21,6 +21,7 @@ pub mod bvh;
 pub mod formfactor;
 pub mod geometry;
 pub mod handles;
+pub mod hr;
 pub mod image;
 pub mod limits;
 pub mod material;

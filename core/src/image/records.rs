@@ -146,6 +146,15 @@ impl InstanceRecord {
     pub fn is_exact(&self) -> bool {
         self.flags & EXACT != 0
     }
+
+    /// The similarity transform (validated by [`super::SceneView::open`]).
+    pub fn transform(&self) -> crate::geometry::Similarity {
+        crate::geometry::Similarity {
+            rotation: glam::Quat::from_array(self.rotation),
+            translation: self.translation.into(),
+            scale: self.scale,
+        }
+    }
 }
 
 /// An original: a tree of nodes that instances share.

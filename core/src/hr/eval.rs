@@ -1,0 +1,244 @@
+//! Link coefficients: how much irradiance a receiver gets per unit radiosity of an emitter.
+//!
+//! * to a patch: the average over the patch's fixed quadrature points of the exact
+//!   point-to-polygon form factor (for a patch emitter) or of the isotropic-cluster and
+//!   directional-source kernels, times the fraction of unblocked visibility rays;
+//! * to a cluster: the flux density on a plane facing the emitter, from points spread over
+//!   the cluster's surfaces (isotropic volume).
+//!
+//! Kernels for clusters are bounded for close elements (`A / (4 pi r^2 + A)` instead of
+//! `A / (4 pi r^2)`), so that sums never blow up. Every sample point comes from a hash of the
+//! two elements, so a link's value never depends on when or on which thread it is computed.
+
+use super::ids::Elem;
+use super::sample::point_in;
+use super::state::{Shape, State};
+use crate::formfactor::{facing_side, point_polygon};
+use crate::limits::NONE;
+use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
+use crate::visibility::Visibility;
+use core::f32::consts::PI;
+use glam::Vec3;
+
+/// Coefficients of one link, by receiving side and emitting side.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Coefficients {
+    pub k: [[f32; 2]; 2],
+    /// The same without occlusion, over the sides that carry energy.
+    pub open: f32,
+    pub partial: bool,
+    pub rays: u32,
+}
+
+/// Receiving sides of an element: both for a two-sided patch, the front otherwise (the back
+/// of a one-sided patch absorbs; a cluster has one "side", its flux density).
+fn recv_sides(shape: &Shape) -> usize {
+    match shape {
+        Shape::Patch {
+            two_sided: true, ..
+        } => 2,
+        _ => 1,
+    }
+}
+
+/// True if the emitter's side `s` carries radiosity.
+fn emits(shape: &Shape, s: usize) -> bool {
+    match shape {
+        Shape::Patch { two_sided, .. } => s == 0 || *two_sided,
+        _ => s == 0,
+    }
+}
+
+pub(crate) fn evaluate<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    emit: Elem,
+    vis: &V,
+) -> Coefficients {
+    let r = st.shape(ws, recv);
+    let e = st.shape(ws, emit);
+    let rays = st.settings.rays.max(1);
+    let mut out = Coefficients::default();
+    let seed = hash3(recv.0, emit.0, 0x11AD);
+    match r {
+        Shape::Patch {
+            corners,
+            n,
+            normal,
+            poly,
+            ..
+        } => {
+            let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+            let m = quadrature(&corners[..n], &mut pts, &mut wts);
+            for q in 0..m {
+                let (x, w) = (pts[q], wts[q]);
+                for side in 0..recv_sides(&r) {
+                    let nr = if side == 0 { normal } else { -normal };
+                    let qs = hash3(seed, q as u32, side as u32);
+                    let (contrib, open, s_side) =
+                        to_point(st, ws, x, nr, poly, &e, emit, qs, rays, vis, &mut out);
+                    out.k[side][s_side] += w * contrib;
+                    out.open += w * open;
+                }
+            }
+        }
+        Shape::Cluster { .. } => {
+            let inv = 1.0 / rays as f32;
+            for k in 0..rays {
+                let (x, px) = point_in(st, ws, recv, hash3(seed, k, 0xC1));
+                let (f, open, s_side, v) =
+                    flux_at(st, ws, x, px, &e, emit, hash3(seed, k, 0xE1), vis);
+                out.rays += (f > 0.0 || open > 0.0) as u32;
+                out.k[0][s_side] += inv * f * v;
+                out.open += inv * open;
+                out.partial |= v < 1.0 && open > 0.0;
+            }
+        }
+        Shape::Source { .. } => {}
+    }
+    out
+}
+
+/// Irradiance coefficient at point `x` (normal `nr`, on polygon `poly`) from the emitter:
+/// returns (visible coefficient, open coefficient, emitting side).
+#[allow(clippy::too_many_arguments)]
+fn to_point<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    x: Vec3,
+    nr: Vec3,
+    poly: u32,
+    e: &Shape,
+    emit: Elem,
+    seed: u32,
+    rays: u32,
+    vis: &V,
+    out: &mut Coefficients,
+) -> (f32, f32, usize) {
+    match *e {
+        Shape::Patch {
+            corners,
+            n,
+            normal,
+            poly: ep,
+            ..
+        } => {
+            let Some(s_side) = facing_side(x, corners[0], normal) else {
+                return (0.0, 0.0, 0);
+            };
+            if !emits(e, s_side) {
+                return (0.0, 0.0, s_side);
+            }
+            let f = point_polygon(x, nr, &corners[..n]);
+            if f <= 0.0 {
+                return (0.0, 0.0, s_side);
+            }
+            // Rays to points of the emitter in front of the receiving side.
+            let (mut seen, mut cast) = (0.0f32, 0u32);
+            for j in 0..2 * rays {
+                if cast == rays {
+                    break;
+                }
+                let (u, v) = unit2(hash3(seed, j, 0xA5));
+                let y = point_on(&corners[..n], u, v);
+                if nr.dot(y - x) <= 0.0 {
+                    continue;
+                }
+                seen += vis.transmittance(x, y, [poly, ep]);
+                cast += 1;
+            }
+            out.rays += cast;
+            let v = if cast == 0 { 1.0 } else { seen / cast as f32 };
+            out.partial |= v < 1.0;
+            (f * v, f, s_side)
+        }
+        Shape::Cluster { area, .. } => {
+            let (mut sum, mut open) = (0.0f32, 0.0f32);
+            for j in 0..rays {
+                let (y, py) = point_in(st, ws, emit, hash3(seed, j, 0xB7));
+                let d = y - x;
+                let d2 = d.length_squared();
+                if d2 <= 0.0 {
+                    continue;
+                }
+                let c = nr.dot(d) / libm::sqrtf(d2);
+                if c <= 0.0 {
+                    continue;
+                }
+                let f = area * c / (4.0 * PI * d2 + area);
+                let v = vis.transmittance(x, y, [poly, py]);
+                out.rays += 1;
+                out.partial |= v < 1.0;
+                sum += f * v;
+                open += f;
+            }
+            (sum / rays as f32, open / rays as f32, 0)
+        }
+        Shape::Source { towards } => {
+            let c = nr.dot(towards);
+            if c <= 0.0 {
+                return (0.0, 0.0, 0);
+            }
+            let v = vis.transmittance(x, x + towards * st.far, [poly, NONE]);
+            out.rays += 1;
+            out.partial |= v < 1.0;
+            (c * v, c, 0)
+        }
+    }
+}
+
+/// Flux density (per unit radiosity of the emitter) on a plane facing the emitter at `x`
+/// inside a receiving cluster: returns (coefficient, open coefficient, emitting side,
+/// visibility).
+#[allow(clippy::too_many_arguments)]
+fn flux_at<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    x: Vec3,
+    px: u32,
+    e: &Shape,
+    emit: Elem,
+    seed: u32,
+    vis: &V,
+) -> (f32, f32, usize, f32) {
+    match *e {
+        Shape::Patch {
+            corners,
+            n,
+            normal,
+            poly: ep,
+            area,
+            ..
+        } => {
+            let Some(s_side) = facing_side(x, corners[0], normal) else {
+                return (0.0, 0.0, 0, 1.0);
+            };
+            if !emits(e, s_side) {
+                return (0.0, 0.0, s_side, 1.0);
+            }
+            let (u, v) = unit2(seed);
+            let y = point_on(&corners[..n], u, v);
+            let d = x - y;
+            let d2 = d.length_squared();
+            if d2 <= 0.0 {
+                return (0.0, 0.0, s_side, 1.0);
+            }
+            let c = normal.dot(d).abs() / libm::sqrtf(d2);
+            let f = area * c / (PI * d2 + area);
+            let vis = vis.transmittance(x, y, [px, ep]);
+            (f, f, s_side, vis)
+        }
+        Shape::Cluster { area, .. } => {
+            let (y, py) = point_in(st, ws, emit, seed);
+            let d2 = (x - y).length_squared();
+            let f = area / (4.0 * PI * d2 + area);
+            let v = vis.transmittance(x, y, [px, py]);
+            (f, f, 0, v)
+        }
+        Shape::Source { towards } => {
+            let v = vis.transmittance(x, x + towards * st.far, [px, NONE]);
+            (1.0, 1.0, 0, v)
+        }
+    }
+}

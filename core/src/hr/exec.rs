@@ -1,0 +1,133 @@
+//! Running the solver's independent chunks of work: on the caller's threads, or one at a
+//! time in the workspace's own scratch.
+
+use core::ops::Range;
+
+/// Spreads chunks of work over threads (the runner uses rayon); the core's default runs
+/// them itself.
+///
+/// Chunks are fixed by the solver, independent of each other and applied in increasing
+/// order after they are computed, so an executor can never change the result.
+pub trait Executor {
+    /// Computes every chunk in `chunks` with `work(chunk, out)`, each with its own `out` of
+    /// `out_len` floats, in any order and possibly concurrently, keeping the outputs for
+    /// [`Executor::output`]. Returns false to let the solver run them itself.
+    fn compute(
+        &mut self,
+        chunks: Range<usize>,
+        out_len: usize,
+        work: &(dyn Fn(usize, &mut [f32]) + Sync),
+    ) -> bool;
+
+    /// The output of a chunk of the last [`Executor::compute`].
+    fn output(&self, chunk: usize) -> &[f32];
+
+    /// How many chunks it takes at once.
+    fn batch(&self) -> usize {
+        1
+    }
+}
+
+/// Runs nothing itself: the solver computes chunk after chunk in its workspace.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Sequential;
+
+impl Executor for Sequential {
+    fn compute(
+        &mut self,
+        _: Range<usize>,
+        _: usize,
+        _: &(dyn Fn(usize, &mut [f32]) + Sync),
+    ) -> bool {
+        false
+    }
+
+    fn output(&self, _: usize) -> &[f32] {
+        &[]
+    }
+}
+
+/// Told how a long solve is going.
+pub trait Progress {
+    /// `what` is a phase name ("refining", "solving", ...); `done` of `total` units.
+    fn report(&mut self, what: &str, done: u64, total: u64);
+}
+
+/// Ignores progress.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn report(&mut self, _: &str, _: u64, _: u64) {}
+}
+
+/// The caller's executor, with the workspace scratch as the fallback when it declines.
+pub(crate) struct Fallback<'a, E: Executor> {
+    pub inner: &'a mut E,
+    pub scratch: &'a mut [f32],
+}
+
+impl<E: Executor> Fallback<'_, E> {
+    /// Chunks to take at once.
+    pub(crate) fn batch(&self) -> usize {
+        self.inner.batch().max(1)
+    }
+
+    /// Computes `chunks`; returns true if the outputs live in the inner executor.
+    pub(crate) fn compute(
+        &mut self,
+        chunks: Range<usize>,
+        out_len: usize,
+        work: &(dyn Fn(usize, &mut [f32]) + Sync),
+    ) -> Result<bool, ()> {
+        if self.inner.compute(chunks.clone(), out_len, work) {
+            return Ok(true);
+        }
+        // One chunk at a time through the scratch: callers take batches of one then.
+        if chunks.len() != 1 || out_len > self.scratch.len() {
+            return Err(());
+        }
+        work(chunks.start, &mut self.scratch[..out_len]);
+        Ok(false)
+    }
+
+    pub(crate) fn output(&self, chunk: usize, inner: bool, out_len: usize) -> &[f32] {
+        if inner {
+            self.inner.output(chunk)
+        } else {
+            &self.scratch[..out_len]
+        }
+    }
+}
+
+/// Runs `work` over `n` chunks and `apply`s their outputs in order.
+pub(crate) fn run_chunks<E: Executor, T>(
+    ex: &mut Fallback<'_, E>,
+    ctx: &mut T,
+    n: usize,
+    out_len: usize,
+    work: impl Fn(&T, usize, &mut [f32]) + Sync,
+    mut apply: impl FnMut(&mut T, usize, &[f32]),
+) where
+    T: Sync,
+{
+    let mut start = 0;
+    let mut batch = ex.batch();
+    while start < n {
+        let end = (start + batch).min(n);
+        let shared: &T = ctx;
+        let w = |c: usize, out: &mut [f32]| work(shared, c, out);
+        match ex.compute(start..end, out_len, &w) {
+            Ok(inner) => {
+                for c in start..end {
+                    apply(ctx, c, ex.output(c, inner, out_len));
+                }
+                start = end;
+            }
+            // The executor declined a batch: take chunks one by one from now on.
+            Err(()) if batch > 1 => batch = 1,
+            // Cannot happen (the scratch is sized for any chunk); never loop forever.
+            Err(()) => break,
+        }
+    }
+}

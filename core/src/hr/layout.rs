@@ -1,0 +1,185 @@
+//! Where everything lives in the workspace, computed the same way for planning and for
+//! solving, so that a plan is exact.
+//!
+//! Static regions (sized from the census): materials, input polygons, clusters with their
+//! values, child lists, sources, the loading stack, grouping scratch, the executor's scratch
+//! and the block tables. The rest is cut into blocks shared by the growing pools.
+
+use super::Settings;
+use super::census::Census;
+use super::records::*;
+
+/// Alignment of every region (bytes).
+pub(crate) const ALIGN: usize = 16;
+
+fn up(x: usize) -> usize {
+    x.div_ceil(ALIGN) * ALIGN
+}
+
+/// Bytes of one loading-stack frame.
+pub(crate) const FRAME_BYTES: usize = 64;
+/// Bytes per grouping item (element id + centroid).
+pub(crate) const GROUP_ITEM_BYTES: usize = 16;
+/// Links evaluated or receivers gathered per chunk of work (fixed: results never depend on
+/// how many threads share the chunks).
+pub(crate) const CHUNK: usize = 64;
+
+/// Record strides of a scene.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Strides {
+    pub bands: usize,
+    pub cluster: usize,
+    pub patch1: usize,
+    pub patch2: usize,
+    pub source: usize,
+    pub link: usize,
+    /// Coefficients per link: 1 without two-sided materials, 4 with.
+    pub link_k: usize,
+}
+
+impl Strides {
+    pub(crate) fn new(bands: usize, any_two_sided: bool) -> Strides {
+        let link_k = if any_two_sided { 4 } else { 1 };
+        Strides {
+            bands,
+            cluster: core::mem::size_of::<Cluster>() + 8 * bands,
+            patch1: core::mem::size_of::<Patch>() + 8 * bands,
+            patch2: core::mem::size_of::<Patch>() + 16 * bands,
+            source: core::mem::size_of::<Source>() + 4 * bands,
+            link: core::mem::size_of::<Link>() + 4 * link_k,
+            link_k,
+        }
+    }
+
+    /// Floats an evaluated link hands back: its coefficients, the open coefficient, the
+    /// partial-visibility flag and the rays cast.
+    pub(crate) fn eval_out(&self) -> usize {
+        self.link_k + 3
+    }
+
+    /// Floats a gathered receiver hands back: irradiance per side and band.
+    pub(crate) fn gather_out(&self) -> usize {
+        2 * self.bands
+    }
+}
+
+/// Byte offsets of the static regions and the block area.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Layout {
+    pub strides: Strides,
+    pub materials: usize,
+    pub polygons: usize,
+    pub clusters: usize,
+    pub children: usize,
+    pub sources: usize,
+    pub stack: usize,
+    pub group: usize,
+    /// The executor's scratch: the last `scratch_floats` floats of the workspace, after
+    /// `main_bytes`.
+    pub scratch_floats: usize,
+    /// Bytes before the scratch (everything else lives there).
+    pub main_bytes: usize,
+    pub tables: [usize; 3],
+    pub blocks_base: usize,
+    pub block_size: usize,
+    pub block_count: u32,
+    /// Bytes before the blocks (tables and scratch included).
+    pub static_bytes: usize,
+    /// Bytes of the static regions alone (without block tables and scratch).
+    pub fixed_bytes: usize,
+    /// Counts the regions were sized for.
+    pub n_clusters: u32,
+    pub n_polygons: u32,
+}
+
+/// Block size for a workspace of `bytes`: about 1/256 of the dynamic space, within
+/// 4 KiB..256 KiB, a power of two.
+fn block_size(dynamic: usize) -> usize {
+    let target = (dynamic / 256).clamp(4096, 256 * 1024);
+    let mut b = 4096;
+    while b * 2 <= target {
+        b *= 2;
+    }
+    b
+}
+
+impl Layout {
+    /// Lays out a workspace of `total` bytes for a scene; `None` if the static part alone
+    /// does not fit (or counts overflow).
+    pub(crate) fn new(
+        census: &Census,
+        materials: u32,
+        sources: u32,
+        bands: usize,
+        settings: &Settings,
+        total: usize,
+    ) -> Option<Layout> {
+        let any_two = census.polys_two_sided > 0;
+        let strides = Strides::new(bands, any_two);
+        let n_clusters = u32::try_from(census.clusters)
+            .ok()
+            .filter(|&c| c <= super::ids::Elem::MAX_INDEX)?;
+        let n_polygons = u32::try_from(census.polygons())
+            .ok()
+            .filter(|&p| p <= super::ids::Elem::MAX_INDEX)?;
+        let mut at = 0usize;
+        let mut region = |bytes: usize| -> Option<usize> {
+            let start = at;
+            at = at.checked_add(up(bytes))?;
+            Some(start)
+        };
+        let materials_at = region(materials as usize * core::mem::size_of::<Material>())?;
+        let polygons_at = region(n_polygons as usize * core::mem::size_of::<Polygon>())?;
+        let clusters_at = region((n_clusters as usize).checked_mul(strides.cluster)?)?;
+        let children_at = region((n_clusters as usize + n_polygons as usize) * 4)?;
+        let sources_at = region(sources as usize * strides.source)?;
+        let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
+        let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
+        let scratch_floats = CHUNK * strides.eval_out().max(strides.gather_out());
+        let _ = settings;
+        let before_tables = at;
+        let total = total.checked_sub(up(scratch_floats * 4))? / ALIGN * ALIGN;
+        if before_tables > total {
+            return None;
+        }
+        // Blocks and their tables share what is left: each block costs its bytes plus one
+        // table entry in each of the three pools.
+        let dynamic = total - before_tables;
+        let size = block_size(dynamic);
+        let mut count = (dynamic / (size + 12)) as u32;
+        loop {
+            let tables = 3 * up(count as usize * 4);
+            if before_tables + tables + count as usize * size <= total || count == 0 {
+                break;
+            }
+            count -= 1;
+        }
+        let table_bytes = up(count as usize * 4);
+        let tables = [
+            before_tables,
+            before_tables + table_bytes,
+            before_tables + 2 * table_bytes,
+        ];
+        let blocks_base = before_tables + 3 * table_bytes;
+        Some(Layout {
+            strides,
+            materials: materials_at,
+            polygons: polygons_at,
+            clusters: clusters_at,
+            children: children_at,
+            sources: sources_at,
+            stack: stack_at,
+            group: group_at,
+            scratch_floats,
+            main_bytes: total,
+            tables,
+            blocks_base,
+            block_size: size,
+            block_count: count,
+            static_bytes: blocks_base + up(scratch_floats * 4),
+            fixed_bytes: before_tables,
+            n_clusters,
+            n_polygons,
+        })
+    }
+}

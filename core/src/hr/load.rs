@@ -1,0 +1,549 @@
+//! Loading the expanded scene into the workspace: materials, sources, one cluster per scene
+//! node (exact instances replaced by their original's tree, approximate ones by their own),
+//! grouping levels under crowded clusters, and one root patch per input polygon, in global-id
+//! order. Clusters are numbered so that a parent always comes before its children: the
+//! push-pull passes are then plain forward and backward loops.
+
+use super::census::Census;
+use super::ids::{Elem, Kind};
+use super::layout::{FRAME_BYTES, GROUP_ITEM_BYTES, Layout};
+use super::pool::{Blocks, Pool, read, write};
+use super::records::*;
+use super::state::State;
+use super::{HrError, Settings, Stats};
+use crate::geometry::{Aabb, Similarity, polygon_shape};
+use crate::image::{SceneSource, SceneView};
+use crate::limits::{MAX_BANDS, NONE};
+use crate::material::MaterialData;
+use crate::{LightId, MaterialId, NodeId, PolyId, VertexId};
+use bytemuck::{Pod, Zeroable};
+use glam::{Quat, Vec3};
+
+/// A node whose children are being loaded.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct Frame {
+    /// Next child node to visit.
+    next: u32,
+    /// End of the node's subtree.
+    end: u32,
+    /// Cluster index for the next child node.
+    next_cluster: u32,
+    reserved: u32,
+    rotation: [f32; 4],
+    translation: [f32; 3],
+    scale: f32,
+}
+
+const _: () = assert!(core::mem::size_of::<Frame>() <= FRAME_BYTES);
+
+/// A child waiting to be grouped: its element and centroid.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct Item {
+    elem: u32,
+    centroid: [f32; 3],
+}
+
+const _: () = assert!(core::mem::size_of::<Item>() == GROUP_ITEM_BYTES);
+
+pub(crate) fn load<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    census: &Census,
+    lay: Layout,
+    ws: &mut [u8],
+) -> Result<State, HrError> {
+    let info = *view.info();
+    let bands = info.bands as usize;
+    let blocks = Blocks {
+        base: lay.blocks_base,
+        size: lay.block_size,
+        total: lay.block_count,
+        used: 0,
+    };
+    let st = lay.strides;
+    let mut s = State {
+        lay,
+        blocks,
+        patches: [
+            Pool::new(st.patch1, &blocks, lay.tables[0]),
+            Pool::new(st.patch2, &blocks, lay.tables[1]),
+        ],
+        links: Pool::new(st.link, &blocks, lay.tables[2]),
+        settings: *settings,
+        bands,
+        clusters: 0,
+        polygons: 0,
+        child_entries: 0,
+        power: 0.0,
+        min_area: 0.0,
+        far: 0.0,
+        stats: Stats {
+            polygons: census.polygons(),
+            ..Stats::default()
+        },
+    };
+    // Materials.
+    for m in 0..info.materials {
+        let d = view.material(MaterialId(m))?;
+        let rec = material_record(&d);
+        write(
+            ws,
+            lay.materials + m as usize * core::mem::size_of::<Material>(),
+            &rec,
+        );
+    }
+    // Sources: suns, then sky directions.
+    for (k, light) in (0..info.suns)
+        .map(|i| view.sun(LightId(i)))
+        .chain((0..info.sky).map(|i| view.sky(LightId(i))))
+        .enumerate()
+    {
+        let l = light?;
+        let e = Elem::new(Kind::Source, k as u32);
+        let at = s.at(ws, e);
+        write(
+            ws,
+            at,
+            &Source {
+                towards: l.towards.to_array(),
+                reserved: 0,
+            },
+        );
+        s.b_mut(ws, e, 0).copy_from_slice(&l.irradiance[..bands]);
+    }
+    load_tree(view, &mut s, ws)?;
+    finish_clusters(&mut s, ws);
+    totals(&mut s, ws, info.suns + info.sky);
+    // The initial links: a self-link on the root, and every source to the root.
+    let root = Elem::new(Kind::Cluster, 0);
+    super::refine::add_link(&mut s, ws, root, root, 0)
+        .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
+    for k in 0..info.suns + info.sky {
+        super::refine::add_link(&mut s, ws, root, Elem::new(Kind::Source, k), 0)
+            .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
+    }
+    Ok(s)
+}
+
+fn material_record(d: &MaterialData) -> Material {
+    let mut m = Material::zeroed();
+    let n = d.bands as usize;
+    m.rho[0][..n].copy_from_slice(&d.rho_front[..n]);
+    m.emit[0][..n].copy_from_slice(&d.emit_front[..n]);
+    if d.two_sided {
+        m.rho[1][..n].copy_from_slice(&d.rho_back[..n]);
+        m.emit[1][..n].copy_from_slice(&d.emit_back[..n]);
+        m.tau[..n].copy_from_slice(&d.tau[..n]);
+        m.two_sided = 1;
+    }
+    let _ = MAX_BANDS;
+    m
+}
+
+fn frame_at(lay: &Layout, depth: usize) -> usize {
+    lay.stack + depth * FRAME_BYTES
+}
+
+fn new_cluster(s: &mut State, ws: &mut [u8], parent: u32) -> Result<u32, HrError> {
+    if s.clusters >= s.lay.n_clusters {
+        return Err(HrError::SceneTooLarge);
+    }
+    let i = s.clusters;
+    s.clusters += 1;
+    let c = Cluster {
+        bbox_min: [0.0; 3],
+        bbox_max: [0.0; 3],
+        parent,
+        children: 0,
+        child_count: 0,
+        links: NONE,
+        area: 0.0,
+        polygons: 0,
+    };
+    s.set_cluster(ws, i, &c);
+    let e = Elem::new(Kind::Cluster, i);
+    s.b_mut(ws, e, 0).fill(0.0);
+    s.h_mut(ws, e, 0).fill(0.0);
+    Ok(i)
+}
+
+/// Walks the expanded scene depth-first and creates clusters and root patches.
+fn load_tree<S: SceneSource>(
+    view: &SceneView<S>,
+    s: &mut State,
+    ws: &mut [u8],
+) -> Result<(), HrError> {
+    let lay = s.lay;
+    let root = new_cluster(s, ws, NONE)?;
+    let mut depth = 0usize;
+    let scene = view.info().scene_root.0;
+    open_node(view, s, ws, scene, root, Similarity::IDENTITY, depth)?;
+    loop {
+        let at = frame_at(&lay, depth);
+        let mut f: Frame = read(ws, at);
+        if f.next >= f.end {
+            if depth == 0 {
+                break;
+            }
+            depth -= 1;
+            continue;
+        }
+        let child = f.next;
+        let rec = view.node(NodeId(child))?;
+        f.next = rec.subtree_end;
+        let cluster = f.next_cluster;
+        f.next_cluster += 1;
+        write(ws, at, &f);
+        let t = Similarity {
+            rotation: Quat::from_array(f.rotation),
+            translation: f.translation.into(),
+            scale: f.scale,
+        };
+        let (node, t) = effective(view, child, &t)?;
+        depth += 1;
+        if frame_at(&lay, depth) + FRAME_BYTES > lay.group {
+            return Err(HrError::SceneTooLarge);
+        }
+        open_node(view, s, ws, node, cluster, t, depth)?;
+    }
+    Ok(())
+}
+
+/// The tree node whose content stands for `node`, and the transform to world: an exact
+/// instance is its original's root, placed by the instance.
+fn effective<S: SceneSource>(
+    view: &SceneView<S>,
+    node: u32,
+    t: &Similarity,
+) -> Result<(u32, Similarity), HrError> {
+    let rec = view.node(NodeId(node))?;
+    match rec.instance() {
+        None => Ok((node, *t)),
+        Some(id) => {
+            let inst = view.instance(id)?;
+            let world = t.compose(&inst.transform());
+            if inst.is_exact() {
+                Ok((view.original(inst.original())?.root, world))
+            } else {
+                Ok((node, world))
+            }
+        }
+    }
+}
+
+/// Loads a node's own polygons into root patches, reserves clusters for its child nodes,
+/// groups the children, and pushes the frame that will visit the child nodes.
+fn open_node<S: SceneSource>(
+    view: &SceneView<S>,
+    s: &mut State,
+    ws: &mut [u8],
+    node: u32,
+    cluster: u32,
+    t: Similarity,
+    depth: usize,
+) -> Result<(), HrError> {
+    let lay = s.lay;
+    let rec = view.node(NodeId(node))?;
+    let mut n_items = 0u32;
+    let item_at = |k: u32| lay.group + k as usize * GROUP_ITEM_BYTES;
+    // Own polygons, in order: their global ids are assigned here.
+    for p in 0..rec.poly_count {
+        let mut pr = [crate::image::PolygonRecord::default()];
+        view.polygons(PolyId(rec.poly_first + p), &mut pr)?;
+        let poly = pr[0];
+        let n = poly.corner_count();
+        let mut corners = [Vec3::ZERO; 4];
+        for (c, corner) in corners.iter_mut().enumerate().take(n) {
+            let mut v = [[0.0f32; 3]];
+            view.vertices(VertexId(rec.vert_first + poly.corners[c]), &mut v)?;
+            *corner = t.point(v[0].into());
+        }
+        let e = add_root_patch(s, ws, &corners[..n], poly.material, cluster)?;
+        let centroid = corners[..n].iter().copied().sum::<Vec3>() / n as f32;
+        write(
+            ws,
+            item_at(n_items),
+            &Item {
+                elem: e.0,
+                centroid: centroid.to_array(),
+            },
+        );
+        n_items += 1;
+    }
+    // Child nodes: count them and note their centres (from their stored boxes).
+    let mut child_nodes = 0u32;
+    let mut j = node + 1;
+    while j < rec.subtree_end {
+        let c = view.node(NodeId(j))?;
+        let b = t.aabb(&Aabb::new(c.bbox_min.into(), c.bbox_max.into()));
+        write(
+            ws,
+            item_at(n_items + child_nodes),
+            &Item {
+                elem: 0,
+                centroid: b.center().to_array(),
+            },
+        );
+        child_nodes += 1;
+        j = c.subtree_end;
+    }
+    // Grouping levels first, then the child nodes' clusters: parents before children.
+    let total = n_items + child_nodes;
+    let groups = super::census::grouping_clusters(total as u64, s.settings.max_children) as u32;
+    let first_group = s.clusters;
+    for _ in 0..groups {
+        new_cluster(s, ws, cluster)?;
+    }
+    let first_child_cluster = s.clusters;
+    for k in 0..child_nodes {
+        let c = new_cluster(s, ws, cluster)?;
+        let at = item_at(n_items + k);
+        let mut it: Item = read(ws, at);
+        it.elem = Elem::new(Kind::Cluster, c).0;
+        write(ws, at, &it);
+    }
+    group(s, ws, cluster, total, first_group, groups)?;
+    let f = Frame {
+        next: node + 1,
+        end: rec.subtree_end,
+        next_cluster: first_child_cluster,
+        reserved: 0,
+        rotation: t.rotation.to_array(),
+        translation: t.translation.to_array(),
+        scale: t.scale,
+    };
+    write(ws, frame_at(&lay, depth), &f);
+    Ok(())
+}
+
+fn add_root_patch(
+    s: &mut State,
+    ws: &mut [u8],
+    corners: &[Vec3],
+    material: u32,
+    parent: u32,
+) -> Result<Elem, HrError> {
+    let shape = polygon_shape(corners).map_err(|_| HrError::BadGeometry {
+        polygon: s.polygons as u64,
+    })?;
+    let m = s.material(ws, material);
+    let kind = if m.two_sided != 0 {
+        Kind::Patch2
+    } else {
+        Kind::Patch1
+    };
+    let pool = if kind == Kind::Patch2 { 1 } else { 0 };
+    let mut blocks = s.blocks;
+    let i = s.patches[pool]
+        .alloc_run(ws, &mut blocks, 1)
+        .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
+    s.blocks = blocks;
+    let e = Elem::new(kind, i);
+    let poly = s.polygons;
+    s.polygons += 1;
+    let mut c = [[0.0f32; 3]; 4];
+    for (d, src) in c.iter_mut().zip(corners) {
+        *d = src.to_array();
+    }
+    let p = Patch {
+        corners: c,
+        parent: Elem::new(Kind::Cluster, parent).0,
+        first_child: NONE,
+        poly,
+        links: NONE,
+        area: shape.area,
+        shape: corners.len() as u32,
+        closure: [1.0; 2],
+    };
+    s.set_patch(ws, e, &p);
+    for side in 0..State::sides(e) {
+        let b = s.b_mut(ws, e, side);
+        b.copy_from_slice(&m.emit[side][..b.len()]);
+        s.h_mut(ws, e, side).fill(0.0);
+    }
+    let rec = Polygon {
+        normal: shape.normal.to_array(),
+        material,
+        root: e.0,
+    };
+    write(
+        ws,
+        s.lay.polygons + poly as usize * core::mem::size_of::<Polygon>(),
+        &rec,
+    );
+    Ok(e)
+}
+
+/// Writes the child lists of `cluster` and of the `groups` grouping clusters reserved from
+/// `first_group`, splitting the `total` items in the grouping scratch in halves along their
+/// widest axis until no cluster has more than `max_children` children. Deterministic: ties
+/// are broken by element id.
+fn group(
+    s: &mut State,
+    ws: &mut [u8],
+    cluster: u32,
+    total: u32,
+    first_group: u32,
+    groups: u32,
+) -> Result<(), HrError> {
+    let m = s.settings.max_children.max(2);
+    let lay = s.lay;
+    let mut next_group = first_group;
+    // (first item, count, cluster): ranges still to place.
+    let mut todo: heapless::Vec<(u32, u32, u32), 96> = heapless::Vec::new();
+    todo.push((0, total, cluster))
+        .map_err(|_| HrError::SceneTooLarge)?;
+    while let Some((first, count, owner)) = todo.pop() {
+        let items: &mut [Item] = bytemuck::cast_slice_mut(
+            &mut ws[lay.group + first as usize * GROUP_ITEM_BYTES
+                ..lay.group + (first + count) as usize * GROUP_ITEM_BYTES],
+        );
+        let mut entries: heapless::Vec<u32, 2> = heapless::Vec::new();
+        let direct = count <= m;
+        if !direct {
+            let mut b = Aabb::EMPTY;
+            for it in items.iter() {
+                b.include(it.centroid.into());
+            }
+            let ext = b.max - b.min;
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let half = (count - count / 2) as usize;
+            items.select_nth_unstable_by(half.min(items.len() - 1), |a, b| {
+                a.centroid[axis]
+                    .total_cmp(&b.centroid[axis])
+                    .then(a.elem.cmp(&b.elem))
+            });
+            for (start, len) in [
+                (first, half as u32),
+                (first + half as u32, count - half as u32),
+            ] {
+                if len == 1 {
+                    let it: Item = read(ws, lay.group + start as usize * GROUP_ITEM_BYTES);
+                    let _ = entries.push(it.elem);
+                } else {
+                    if next_group >= first_group + groups {
+                        return Err(HrError::SceneTooLarge);
+                    }
+                    let g = next_group;
+                    next_group += 1;
+                    let _ = entries.push(Elem::new(Kind::Cluster, g).0);
+                    todo.push((start, len, g))
+                        .map_err(|_| HrError::SceneTooLarge)?;
+                }
+            }
+        }
+        // Write the owner's child list and re-parent its children.
+        let n = if direct { count } else { entries.len() as u32 };
+        let base = s.child_entries;
+        if base + n > s.lay.n_clusters + s.lay.n_polygons {
+            return Err(HrError::SceneTooLarge);
+        }
+        s.child_entries += n;
+        for k in 0..n {
+            let e = if direct {
+                let it: Item = read(ws, lay.group + (first + k) as usize * GROUP_ITEM_BYTES);
+                Elem(it.elem)
+            } else {
+                Elem(entries[k as usize])
+            };
+            write(ws, lay.children + 4 * (base + k) as usize, &e.0);
+            set_parent(s, ws, e, owner);
+        }
+        let mut c = s.cluster(ws, owner);
+        c.children = base;
+        c.child_count = n;
+        s.set_cluster(ws, owner, &c);
+    }
+    Ok(())
+}
+
+fn set_parent(s: &State, ws: &mut [u8], e: Elem, parent: u32) {
+    if e.kind() == Kind::Cluster {
+        let mut c = s.cluster(ws, e.index());
+        c.parent = parent;
+        s.set_cluster(ws, e.index(), &c);
+    } else {
+        let mut p = s.patch(ws, e);
+        p.parent = Elem::new(Kind::Cluster, parent).0;
+        s.set_patch(ws, e, &p);
+    }
+}
+
+/// Boxes, areas and polygon counts of clusters, children before parents.
+fn finish_clusters(s: &mut State, ws: &mut [u8]) {
+    for i in (0..s.clusters).rev() {
+        let mut c = s.cluster(ws, i);
+        let mut b = Aabb::EMPTY;
+        let (mut area, mut polys) = (0.0f32, 0u32);
+        for k in 0..c.child_count {
+            let e = s.child(ws, c.children + k);
+            match e.kind() {
+                Kind::Cluster => {
+                    let cc = s.cluster(ws, e.index());
+                    if cc.polygons > 0 {
+                        b = b.union(Aabb::new(cc.bbox_min.into(), cc.bbox_max.into()));
+                    }
+                    area += cc.area;
+                    polys += cc.polygons;
+                }
+                _ => {
+                    let p = s.patch(ws, e);
+                    for corner in &p.corners[..p.corner_count()] {
+                        b.include((*corner).into());
+                    }
+                    area += p.area;
+                    polys += 1;
+                }
+            }
+        }
+        if b.is_empty() {
+            b = Aabb::new(Vec3::ZERO, Vec3::ZERO);
+        }
+        c.bbox_min = b.min.to_array();
+        c.bbox_max = b.max.to_array();
+        c.area = area;
+        c.polygons = polys;
+        s.set_cluster(ws, i, &c);
+    }
+}
+
+/// The scene's emitted power (epsilon's unit), the minimum patch area and the ray length
+/// that leaves the scene.
+fn totals(s: &mut State, ws: &[u8], sources: u32) {
+    let nb = s.bands;
+    let mut power = [0.0f64; MAX_BANDS];
+    for i in 0..s.polygons {
+        let poly = s.polygon(ws, i);
+        let m = s.material(ws, poly.material);
+        let area = s.patch(ws, Elem(poly.root)).area as f64;
+        for (b, p) in power.iter_mut().enumerate().take(nb) {
+            *p += area * (m.emit[0][b] as f64 + m.emit[1][b] as f64);
+        }
+    }
+    let root = s.cluster(ws, 0);
+    let (lo, hi) = (Vec3::from(root.bbox_min), Vec3::from(root.bbox_max));
+    let d = hi - lo;
+    for k in 0..sources {
+        let e = Elem::new(Kind::Source, k);
+        let src: Source = read(ws, s.at(ws, e));
+        let t = Vec3::from(src.towards).abs();
+        let projected = (t.x * d.y * d.z + t.y * d.x * d.z + t.z * d.x * d.y) as f64;
+        if let Some(irr) = s.b(ws, e, 0) {
+            for (b, p) in power.iter_mut().enumerate().take(nb) {
+                *p += projected * irr[b] as f64;
+            }
+        }
+    }
+    s.power = power[..nb].iter().copied().fold(0.0, f64::max) as f32;
+    s.stats.emitted_power = s.power;
+    s.min_area = root.area * s.settings.min_area;
+    s.far = 4.0 * d.length().max(f32::MIN_POSITIVE);
+}

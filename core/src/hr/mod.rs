@@ -1,0 +1,406 @@
+//! Hierarchical radiosity with clustering over the whole (expanded) scene, in a workspace the
+//! caller provides.
+//!
+//! The scene is loaded into a cluster hierarchy (crowded clusters get grouping levels); links
+//! start from a self-link on the root and from each directional source to the root, and are
+//! refined while a link's transfer (emitter radiosity x form factor x receiver area) exceeds
+//! `epsilon` times the scene's emitted power, by splitting clusters and subdividing polygons
+//! into quadtree patches. Form factors to polygons are exact point-to-polygon integrals over
+//! fixed receiver quadrature points (so they close to 1 in closed scenes), times visibility
+//! from several deterministic rays; clusters exchange light as isotropic volumes. Gathering
+//! and push-pull iterate to convergence; refinement and solution alternate until nothing
+//! refines. Every byte comes from the workspace; a full workspace stops refinement and is
+//! reported, never a panic.
+//!
+//! Work that dominates (evaluating links, gathering) runs in fixed chunks through an
+//! [`Executor`], so that a caller can spread it over threads: chunks are independent and
+//! applied in order, so results are bit-identical for any number of threads.
+
+mod census;
+mod closure;
+mod eval;
+mod exec;
+mod ids;
+mod layout;
+mod load;
+mod output;
+mod pool;
+mod records;
+mod refine;
+mod sample;
+mod solve;
+mod state;
+
+pub use census::{Census, census, census_scratch_bytes, grouping_clusters};
+pub use exec::{Executor, NoProgress, Progress, Sequential};
+
+use crate::image::{ImageError, SceneSource, SceneView};
+use crate::sink::Sink;
+use crate::visibility::Visibility;
+use layout::{ALIGN, Layout};
+
+/// What the caller chooses: speed against accuracy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Refinement threshold: a link is refined while its transfer exceeds `epsilon` times the
+    /// scene's emitted power (dimensionless). Smaller is finer and slower.
+    pub epsilon: f32,
+    /// Smallest patch, as a fraction of the scene's total polygon area.
+    pub min_area: f32,
+    /// Deepest quadtree subdivision of an input polygon.
+    pub max_depth: u32,
+    /// Visibility rays per receiver quadrature point (per side) and per cluster link.
+    pub rays: u32,
+    /// Convergence: stop iterating when the estimated remaining change of any radiosity is
+    /// below this fraction of the largest radiosity.
+    pub tolerance: f32,
+    /// Cap on gather / push-pull iterations per solution.
+    pub max_iterations: u32,
+    /// Cap on refine-then-solve rounds.
+    pub max_rounds: u32,
+    /// Most children a cluster keeps before grouping levels are inserted (2..=16).
+    pub max_children: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            epsilon: 1e-3,
+            min_area: 1e-6,
+            max_depth: 12,
+            rays: 4,
+            tolerance: 1e-4,
+            max_iterations: 20_000,
+            max_rounds: 24,
+            max_children: 8,
+        }
+    }
+}
+
+/// What a solve did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Input polygons (after expansion).
+    pub polygons: u64,
+    /// Clusters (grouping levels included).
+    pub clusters: u64,
+    /// Patches (input polygons and their sub-patches).
+    pub patches: u64,
+    /// Links at the end.
+    pub links: u64,
+    /// Most links alive at once.
+    pub peak_links: u64,
+    /// Link coefficients computed.
+    pub evaluations: u64,
+    /// Visibility rays cast.
+    pub rays: u64,
+    /// Gather / push-pull iterations, all rounds.
+    pub iterations: u64,
+    /// Refine-then-solve rounds.
+    pub rounds: u32,
+    /// Refinement passes, all rounds.
+    pub refinement_passes: u64,
+    /// Peak workspace bytes in use.
+    pub peak_bytes: u64,
+    /// Workspace bytes provided.
+    pub workspace_bytes: u64,
+    /// True when refinement stopped because the workspace was full.
+    pub budget_limited: bool,
+    /// True when the last solution stopped at the iteration cap before converging.
+    pub iteration_capped: bool,
+    /// The scene's emitted power that epsilon is relative to (W, largest band).
+    pub emitted_power: f32,
+}
+
+/// Why a solve could not run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrError {
+    /// The image could not be read.
+    Image(ImageError),
+    /// The workspace cannot hold even the coarsest solution; `needed` bytes would.
+    WorkspaceTooSmall {
+        /// Bytes the coarsest solution needs.
+        needed: u64,
+    },
+    /// The scratch given to planning is too small.
+    ScratchTooSmall,
+    /// The expanded scene has more elements than one workspace can index.
+    SceneTooLarge,
+    /// Nothing emits light: no emitting material, sun or sky.
+    NoLight,
+    /// The scene has no polygons.
+    Empty,
+    /// A polygon is unusable once placed (its instance transforms overflow f32).
+    BadGeometry {
+        /// Global id of the polygon.
+        polygon: u64,
+    },
+}
+
+impl From<ImageError> for HrError {
+    fn from(e: ImageError) -> Self {
+        HrError::Image(e)
+    }
+}
+
+impl core::fmt::Display for HrError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            HrError::Image(e) => write!(f, "{e}"),
+            HrError::WorkspaceTooSmall { needed } => {
+                write!(
+                    f,
+                    "the workspace cannot hold even the coarsest solution: it needs at least {needed} bytes"
+                )
+            }
+            HrError::ScratchTooSmall => f.write_str("the planning scratch is too small"),
+            HrError::SceneTooLarge => {
+                f.write_str("the expanded scene has more elements than one workspace can index")
+            }
+            HrError::NoLight => {
+                f.write_str("nothing emits light: give a material 'emit', or add a sun or sky")
+            }
+            HrError::Empty => f.write_str("the scene has no polygons"),
+            HrError::BadGeometry { polygon } => {
+                write!(
+                    f,
+                    "polygon {polygon} is unusable once placed (its transforms overflow 32-bit floats)"
+                )
+            }
+        }
+    }
+}
+
+/// A solve error: the solver's own, or the sink's.
+#[derive(Debug, PartialEq, Eq)]
+pub enum SolveError<E> {
+    /// The solver could not run.
+    Hr(HrError),
+    /// The sink refused a result.
+    Sink(E),
+}
+
+impl<E> From<HrError> for SolveError<E> {
+    fn from(e: HrError) -> Self {
+        SolveError::Hr(e)
+    }
+}
+
+impl<E> From<ImageError> for SolveError<E> {
+    fn from(e: ImageError) -> Self {
+        SolveError::Hr(HrError::Image(e))
+    }
+}
+
+/// What a scene needs, in bytes of workspace.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Plan {
+    /// The expanded scene's counts.
+    pub census: Census,
+    /// Bytes of the static part (everything but the growing pools) at `min_bytes`.
+    pub static_bytes: u64,
+    /// The least workspace that holds the coarsest solution (input polygons, initial links).
+    pub min_bytes: u64,
+    /// A workspace that usually lets refinement finish at this epsilon (an estimate: the run
+    /// reports whether the budget limited it).
+    pub suggested_bytes: u64,
+    /// Bytes per patch of a one-sided / two-sided polygon.
+    pub patch_bytes: [u64; 2],
+    /// Bytes per link.
+    pub link_bytes: u64,
+}
+
+/// Aligns the workspace start; returns the usable part.
+fn aligned(ws: &mut [u8]) -> &mut [u8] {
+    let skip = ws.as_ptr().align_offset(ALIGN).min(ws.len());
+    &mut ws[skip..]
+}
+
+/// Plans a solve: the exact minimum and a suggested workspace size. `scratch` must hold
+/// [`census_scratch_bytes`].
+pub fn plan<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    scratch: &mut [u8],
+) -> Result<Plan, HrError> {
+    let c = census(view, settings.max_children, scratch)?;
+    plan_from(view, settings, &c)
+}
+
+fn sources<S: SceneSource>(view: &SceneView<S>) -> u32 {
+    view.info().suns + view.info().sky
+}
+
+fn plan_from<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    c: &Census,
+) -> Result<Plan, HrError> {
+    let info = view.info();
+    let bands = info.bands as usize;
+    let lay0 = Layout::new(
+        c,
+        info.materials,
+        sources(view),
+        bands,
+        settings,
+        usize::MAX / 4,
+    )
+    .ok_or(HrError::SceneTooLarge)?;
+    let st = lay0.strides;
+    let fits = |total: u64| -> bool {
+        let Some(lay) = Layout::new(
+            c,
+            info.materials,
+            sources(view),
+            bands,
+            settings,
+            total as usize,
+        ) else {
+            return false;
+        };
+        let per = |stride: usize| (lay.block_size / stride) as u64;
+        let blocks = |n: u64, stride: usize| {
+            if n == 0 {
+                0
+            } else {
+                n.div_ceil(per(stride).max(1))
+            }
+        };
+        let links = 2 + sources(view) as u64 + 64;
+        let total = blocks(c.polys_one_sided, st.patch1)
+            + blocks(c.polys_two_sided, st.patch2)
+            + blocks(links, st.link);
+        per(st.patch2) > 0 && per(st.link) > 0 && total <= lay.block_count as u64
+    };
+    // The smallest workspace whose layout holds the coarsest solution.
+    let mut lo = lay0.fixed_bytes as u64;
+    let mut hi = lo.saturating_mul(2).saturating_add(1 << 20);
+    while !fits(hi) {
+        lo = hi;
+        hi = hi.checked_mul(2).ok_or(HrError::SceneTooLarge)?;
+    }
+    while lo + 1024 < hi {
+        let mid = lo + (hi - lo) / 2;
+        if fits(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let min_bytes = hi + ALIGN as u64;
+    // Refinement typically ends near a few patches and some tens of links per polygon at
+    // epsilon 1e-3, growing about as 1/sqrt(epsilon).
+    let scale = libm::sqrtf(1e-3 / settings.epsilon.max(1e-9)).clamp(0.25, 64.0) as f64;
+    let polys = c.polygons() as f64;
+    let patches = polys * 4.0 * scale;
+    let links = (polys * 40.0 + 10_000.0) * scale;
+    let patch_avg = if polys > 0.0 {
+        (c.polys_one_sided as f64 * st.patch1 as f64 + c.polys_two_sided as f64 * st.patch2 as f64)
+            / polys
+    } else {
+        st.patch1 as f64
+    };
+    let grow = patches * patch_avg + links * st.link as f64;
+    let suggested = (min_bytes as f64 + grow * 1.05).min(u64::MAX as f64 / 2.0) as u64;
+    let at_min = Layout::new(
+        c,
+        info.materials,
+        sources(view),
+        bands,
+        settings,
+        min_bytes as usize,
+    )
+    .ok_or(HrError::SceneTooLarge)?;
+    Ok(Plan {
+        census: *c,
+        static_bytes: at_min.static_bytes as u64,
+        min_bytes,
+        suggested_bytes: suggested.max(min_bytes),
+        patch_bytes: [st.patch1 as u64, st.patch2 as u64],
+        link_bytes: st.link as u64,
+    })
+}
+
+/// Solves the scene and hands every polygon to `sink` in global-id order.
+///
+/// `workspace` is all the memory the solver uses; [`plan`] says how much a scene needs.
+pub fn solve<S, V, K, E, P>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    workspace: &mut [u8],
+    visibility: &V,
+    executor: &mut E,
+    progress: &mut P,
+    sink: &mut K,
+) -> Result<Stats, SolveError<K::Error>>
+where
+    S: SceneSource,
+    V: Visibility + ?Sized,
+    K: Sink,
+    E: Executor,
+    P: Progress,
+{
+    let total = workspace.len();
+    let ws = aligned(workspace);
+    // Count the scene with the workspace itself as scratch, then lay it out.
+    let need = census_scratch_bytes(view);
+    if ws.len() < need {
+        return Err(HrError::WorkspaceTooSmall {
+            needed: need as u64,
+        }
+        .into());
+    }
+    let c = census(view, settings.max_children, &mut ws[..need])?;
+    if c.polygons() == 0 {
+        return Err(HrError::Empty.into());
+    }
+    let plan = plan_from(view, settings, &c)?;
+    let info = view.info();
+    let lay = Layout::new(
+        &c,
+        info.materials,
+        sources(view),
+        info.bands as usize,
+        settings,
+        ws.len(),
+    )
+    .ok_or(HrError::WorkspaceTooSmall {
+        needed: plan.min_bytes,
+    })?;
+    let (ws, scratch_bytes) = ws.split_at_mut(lay.main_bytes);
+    let scratch: &mut [f32] = bytemuck::try_cast_slice_mut(
+        &mut scratch_bytes[..lay.scratch_floats * 4],
+    )
+    .map_err(|_| HrError::WorkspaceTooSmall {
+        needed: plan.min_bytes,
+    })?;
+    let mut st = load::load(view, settings, &c, lay, ws).map_err(|e| match e {
+        HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
+            needed: plan.min_bytes,
+        },
+        e => e,
+    })?;
+    st.stats.workspace_bytes = total as u64;
+    progress.report("loaded", st.polygons as u64, st.polygons as u64);
+    let mut seq = exec::Fallback {
+        inner: executor,
+        scratch,
+    };
+    refine::evaluate_pending(&mut st, ws, visibility, &mut seq);
+    for round in 0..settings.max_rounds {
+        st.stats.rounds = round + 1;
+        let refined = refine::refine_until_stable(&mut st, ws, visibility, &mut seq, progress);
+        closure::update(&mut st, ws, &mut seq);
+        solve::iterate(&mut st, ws, &mut seq, progress);
+        if !refined && round > 0 {
+            break;
+        }
+        refine::clear_examined(&mut st, ws);
+    }
+    st.stats.links = st.links.live() as u64;
+    st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
+    progress.report("output", 0, st.polygons as u64);
+    output::emit(&st, ws, sink).map_err(SolveError::Sink)?;
+    Ok(st.stats)
+}

@@ -1,0 +1,458 @@
+//! Creating, evaluating and refining links.
+//!
+//! A refinement pass walks every receiver in order and every link it receives; a link whose
+//! transfer (emitter radiosity x coefficient x receiver area) exceeds `epsilon` times the
+//! emitted power is replaced by links to the children of the larger side (clusters open into
+//! their children; patches split into four). New links wait as pending until the next
+//! evaluation, which computes them in fixed chunks (possibly on many threads) and applies the
+//! results in order. When the workspace cannot hold the new links or patches, the link stays
+//! and the run is marked as limited by its budget.
+
+use super::eval::evaluate;
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::ids::{Elem, Kind};
+use super::layout::CHUNK;
+use super::records::*;
+use super::state::{Shape, State};
+use crate::limits::NONE;
+use crate::sampling::subdivide;
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// Most children any element splits into (clusters keep at most this many after grouping).
+pub(crate) const MAX_KIDS: usize = 16;
+
+/// Adds a link received by `recv` from `emit` at the head of `recv`'s list.
+pub(crate) fn add_link(
+    st: &mut State,
+    ws: &mut [u8],
+    recv: Elem,
+    emit: Elem,
+    flags: u32,
+) -> Option<u32> {
+    let mut blocks = st.blocks;
+    let i = st.links.alloc(ws, &mut blocks)?;
+    st.blocks = blocks;
+    let head = st.links_head(ws, recv);
+    st.set_link(
+        ws,
+        i,
+        &Link {
+            recv: recv.0,
+            emit: emit.0,
+            next: head,
+            flags,
+            k_open: 0.0,
+        },
+    );
+    st.link_k_mut(ws, i).fill(0.0);
+    st.set_links_head(ws, recv, i);
+    st.stats.peak_links = st.stats.peak_links.max(st.links.live() as u64);
+    Some(i)
+}
+
+fn free_link(st: &mut State, ws: &mut [u8], i: u32) {
+    let mut l = st.link(ws, i);
+    l.flags = FREE;
+    st.set_link(ws, i, &l);
+    let blocks = st.blocks;
+    st.links.release(ws, &blocks, i);
+}
+
+/// Context of a chunked phase: the state, the workspace, the visibility.
+struct Ctx<'a, V: ?Sized> {
+    st: &'a mut State,
+    ws: &'a mut [u8],
+    vis: &'a V,
+}
+
+/// Computes the coefficients of every pending link.
+pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &V,
+    ex: &mut Fallback<'_, E>,
+) {
+    let n = st.links.len as usize;
+    let out = st.lay.strides.eval_out();
+    let kk = st.lay.strides.link_k;
+    let mut ctx = Ctx { st, ws, vis };
+    run_chunks(
+        ex,
+        &mut ctx,
+        n.div_ceil(CHUNK),
+        CHUNK * out,
+        |c: &Ctx<'_, V>, chunk, buf| {
+            for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                let l = c.st.link(c.ws, i as u32);
+                if l.flags & (PENDING | FREE) != PENDING {
+                    continue;
+                }
+                let co = evaluate(c.st, c.ws, Elem(l.recv), Elem(l.emit), c.vis);
+                let o = &mut buf[slot * out..(slot + 1) * out];
+                if kk == 1 {
+                    o[0] = co.k[0][0];
+                } else {
+                    o[..4].copy_from_slice(&[co.k[0][0], co.k[0][1], co.k[1][0], co.k[1][1]]);
+                }
+                o[kk] = co.open;
+                o[kk + 1] = if co.partial { 1.0 } else { 0.0 };
+                o[kk + 2] = co.rays as f32;
+            }
+        },
+        |c: &mut Ctx<'_, V>, chunk, buf| {
+            for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                let mut l = c.st.link(c.ws, i as u32);
+                if l.flags & (PENDING | FREE) != PENDING {
+                    continue;
+                }
+                let o = &buf[slot * out..(slot + 1) * out];
+                c.st.link_k_mut(c.ws, i as u32).copy_from_slice(&o[..kk]);
+                l.k_open = o[kk];
+                l.flags = (l.flags & !PENDING) | if o[kk + 1] != 0.0 { PARTIAL } else { 0 };
+                c.st.set_link(c.ws, i as u32, &l);
+                c.st.stats.evaluations += 1;
+                c.st.stats.rays += o[kk + 2] as u64;
+            }
+        },
+    );
+}
+
+/// Refinement passes until a pass changes nothing; true if any link was refined.
+pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progress>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &V,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut P,
+) -> bool {
+    let mut any = false;
+    loop {
+        st.stats.refinement_passes += 1;
+        let changed = refine_pass(st, ws);
+        progress.report("refining", st.links.live() as u64, 0);
+        evaluate_pending(st, ws, vis, ex);
+        st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
+        if !changed {
+            return any;
+        }
+        any = true;
+    }
+}
+
+/// Forgets which links were examined, so that the next pass looks at them again with new
+/// radiosities.
+pub(crate) fn clear_examined(st: &mut State, ws: &mut [u8]) {
+    for i in 0..st.links.len {
+        let mut l = st.link(ws, i);
+        if l.flags & FREE == 0 && l.flags & EXAMINED != 0 {
+            l.flags &= !EXAMINED;
+            st.set_link(ws, i, &l);
+        }
+    }
+}
+
+/// Largest radiosity of an element over its sides and bands (W/m^2).
+fn b_max(st: &State, ws: &[u8], e: Elem) -> f32 {
+    let mut m = 0.0f32;
+    for side in 0..2 {
+        if let Some(b) = st.b(ws, e, side) {
+            m = b.iter().copied().fold(m, f32::max);
+        }
+    }
+    m
+}
+
+/// Area through which an element receives (m^2): a patch's area; for a cluster, the mean
+/// projected area of its surfaces, at most that of its box.
+fn receiving_area(shape: &Shape) -> f32 {
+    match *shape {
+        Shape::Patch { area, .. } => area,
+        Shape::Cluster { min, max, area } => {
+            let d = max - min;
+            let box_mean = 0.5 * (d.x * d.y + d.y * d.z + d.x * d.z);
+            (0.5 * area).min(box_mean.max(0.0))
+        }
+        Shape::Source { .. } => 0.0,
+    }
+}
+
+/// Size of an element for choosing which side of a link to split (m).
+fn radius(shape: &Shape) -> f32 {
+    match *shape {
+        Shape::Patch { area, .. } => libm::sqrtf(area),
+        Shape::Cluster { min, max, .. } => 0.5 * (max - min).length(),
+        Shape::Source { .. } => 0.0,
+    }
+}
+
+fn can_split(st: &State, ws: &[u8], e: Elem) -> bool {
+    match e.kind() {
+        Kind::Cluster => st.cluster(ws, e.index()).child_count > 0,
+        Kind::Source => false,
+        _ => {
+            let p = st.patch(ws, e);
+            p.first_child != NONE
+                || (p.depth() < st.settings.max_depth && p.area * 0.25 >= st.min_area)
+        }
+    }
+}
+
+/// The children an element splits into (subdividing a patch if it has none yet); None when
+/// the workspace cannot hold them.
+fn children(st: &mut State, ws: &mut [u8], e: Elem, out: &mut [Elem; MAX_KIDS]) -> Option<usize> {
+    match e.kind() {
+        Kind::Cluster => {
+            let c = st.cluster(ws, e.index());
+            let mut n = 0;
+            for k in 0..c.child_count.min(MAX_KIDS as u32) {
+                let child = st.child(ws, c.children + k);
+                if super::sample::area(st, ws, child) > 0.0 {
+                    out[n] = child;
+                    n += 1;
+                }
+            }
+            Some(n)
+        }
+        Kind::Source => Some(0),
+        k => {
+            let p = st.patch(ws, e);
+            if p.first_child == NONE {
+                let pool = if k == Kind::Patch2 { 1 } else { 0 };
+                if !st.patches[pool].fits(&st.blocks, 4) {
+                    return None;
+                }
+                subdivide_patch(st, ws, e, &p, pool)?;
+            }
+            let first = st.patch(ws, e).first_child;
+            for (j, o) in out.iter_mut().enumerate().take(4) {
+                *o = Elem::new(k, first + j as u32);
+            }
+            Some(4)
+        }
+    }
+}
+
+fn subdivide_patch(st: &mut State, ws: &mut [u8], e: Elem, p: &Patch, pool: usize) -> Option<()> {
+    let mut corners = [Vec3::ZERO; 4];
+    for (c, src) in corners.iter_mut().zip(p.corners) {
+        *c = src.into();
+    }
+    let n = p.corner_count();
+    let mut kids = [[Vec3::ZERO; 4]; 4];
+    subdivide(&corners[..n], &mut kids);
+    let mut blocks = st.blocks;
+    let first = st.patches[pool].alloc_run(ws, &mut blocks, 4)?;
+    st.blocks = blocks;
+    let kind = e.kind();
+    let sides = State::sides(e);
+    let mut parent_b = [[0.0f32; 8]; 2];
+    for (side, pb) in parent_b.iter_mut().enumerate().take(sides) {
+        if let Some(b) = st.b(ws, e, side) {
+            pb[..b.len()].copy_from_slice(b);
+        }
+    }
+    for (j, kid) in kids.iter().enumerate() {
+        let child = Elem::new(kind, first + j as u32);
+        let shape = crate::geometry::polygon_shape(&kid[..n])
+            .map(|s| s.area)
+            .unwrap_or(p.area * 0.25);
+        let mut c = [[0.0f32; 3]; 4];
+        for (d, src) in c.iter_mut().zip(kid) {
+            *d = src.to_array();
+        }
+        let rec = Patch {
+            corners: c,
+            parent: e.0,
+            first_child: NONE,
+            poly: p.poly,
+            links: NONE,
+            area: shape,
+            shape: n as u32 | ((p.depth() + 1) << 8),
+            closure: [1.0; 2],
+        };
+        st.set_patch(ws, child, &rec);
+        for (side, pb) in parent_b.iter().enumerate().take(sides) {
+            let nb = st.bands;
+            st.b_mut(ws, child, side).copy_from_slice(&pb[..nb]);
+            st.h_mut(ws, child, side).fill(0.0);
+        }
+    }
+    let mut q = *p;
+    q.first_child = first;
+    st.set_patch(ws, e, &q);
+    Some(())
+}
+
+/// Which side of a link to split: `Some(true)` the receiver, `Some(false)` the emitter.
+fn choose(st: &State, ws: &[u8], recv: Elem, emit: Elem, rs: &Shape, es: &Shape) -> Option<bool> {
+    let (can_r, can_e) = (can_split(st, ws, recv), can_split(st, ws, emit));
+    let (rr, re) = (radius(rs), radius(es));
+    let emitter_refined = emit.is_patch() && st.patch(ws, emit).first_child != NONE;
+    let prefer_emitter = match (recv.kind(), emit.kind()) {
+        (_, Kind::Source) => false,
+        (Kind::Cluster, _) | (_, Kind::Cluster) => re > rr,
+        // Between patches the exact form factor already integrates over the emitter: split
+        // it only when its radiosity is resolved finer (it has children) and it is larger.
+        _ => emitter_refined && re >= rr,
+    };
+    match (prefer_emitter, can_r, can_e) {
+        (true, _, true) => Some(false),
+        (_, true, _) => Some(true),
+        (false, false, true) => Some(false),
+        _ => None,
+    }
+}
+
+/// One pass over every receiver's links. Returns true if any link was split.
+fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
+    let threshold = st.settings.epsilon * st.power;
+    let mut changed = false;
+    // The receivers present when the pass starts (patches created during the pass only hold
+    // pending links).
+    let counts = [st.clusters, st.patches[0].len, st.patches[1].len];
+    let kinds = [Kind::Cluster, Kind::Patch1, Kind::Patch2];
+    for (kind, count) in kinds.into_iter().zip(counts) {
+        for index in 0..count {
+            let recv = Elem::new(kind, index);
+            let mut prev = NONE;
+            let mut cur = st.links_head(ws, recv);
+            while cur != NONE {
+                let l = st.link(ws, cur);
+                let next = l.next;
+                if l.flags & (PENDING | EXAMINED) != 0 {
+                    prev = cur;
+                    cur = next;
+                    continue;
+                }
+                let emit = Elem(l.emit);
+                let self_link = l.recv == l.emit;
+                if !self_link && l.k_open <= 0.0 {
+                    // No exchange at all (facing away or coplanar): drop it.
+                    unlink(st, ws, recv, prev, cur, next);
+                    free_link(st, ws, cur);
+                    cur = next;
+                    continue;
+                }
+                let rs = st.shape(ws, recv);
+                let es = st.shape(ws, emit);
+                let refine = self_link || {
+                    let k: f32 = st.link_k(ws, cur).iter().sum();
+                    let k_eff = if l.flags & PARTIAL != 0 { l.k_open } else { k };
+                    b_max(st, ws, emit) * k_eff * receiving_area(&rs) > threshold
+                };
+                let split = if !refine {
+                    None
+                } else if self_link {
+                    Some(split_self(st, ws, recv))
+                } else {
+                    choose(st, ws, recv, emit, &rs, &es)
+                        .map(|on_recv| split_link(st, ws, recv, emit, on_recv))
+                };
+                match split {
+                    Some(Some(added)) => {
+                        // The link is replaced: unlink it (new links for this receiver went to
+                        // the head of its list).
+                        let p = if prev == NONE {
+                            find_prev(st, ws, recv, cur)
+                        } else {
+                            prev
+                        };
+                        unlink(st, ws, recv, p, cur, next);
+                        free_link(st, ws, cur);
+                        let _ = added;
+                        changed = true;
+                        if prev == NONE {
+                            prev = p;
+                        }
+                    }
+                    Some(None) => {
+                        st.stats.budget_limited = true;
+                        mark_examined(st, ws, cur);
+                        prev = cur;
+                    }
+                    None => {
+                        mark_examined(st, ws, cur);
+                        prev = cur;
+                    }
+                }
+                cur = next;
+            }
+        }
+    }
+    changed
+}
+
+fn mark_examined(st: &mut State, ws: &mut [u8], i: u32) {
+    let mut l = st.link(ws, i);
+    l.flags |= EXAMINED;
+    st.set_link(ws, i, &l);
+}
+
+/// The link before `target` in `recv`'s list (NONE if it is the head).
+fn find_prev(st: &State, ws: &[u8], recv: Elem, target: u32) -> u32 {
+    let mut prev = NONE;
+    let mut cur = st.links_head(ws, recv);
+    while cur != NONE && cur != target {
+        prev = cur;
+        cur = st.link(ws, cur).next;
+    }
+    prev
+}
+
+fn unlink(st: &mut State, ws: &mut [u8], recv: Elem, prev: u32, _cur: u32, next: u32) {
+    if prev == NONE {
+        st.set_links_head(ws, recv, next);
+    } else {
+        let mut p = st.link(ws, prev);
+        p.next = next;
+        st.set_link(ws, prev, &p);
+    }
+}
+
+/// Replaces a cluster's self-link by links between every pair of its children (and
+/// self-links on child clusters). None when the workspace cannot hold them.
+fn split_self(st: &mut State, ws: &mut [u8], x: Elem) -> Option<usize> {
+    let mut kids = [Elem::NONE; MAX_KIDS];
+    let n = children(st, ws, x, &mut kids)?;
+    let need = (n * n) as u32;
+    if !st.links.fits(&st.blocks, need) {
+        return None;
+    }
+    let mut added = 0;
+    for &a in &kids[..n] {
+        for &b in &kids[..n] {
+            if a == b && a.kind() != Kind::Cluster {
+                continue;
+            }
+            let flags = if a == b { 0 } else { PENDING };
+            add_link(st, ws, a, b, flags)?;
+            added += 1;
+        }
+    }
+    Some(added)
+}
+
+/// Replaces link recv <- emit by links from the children of one side.
+fn split_link(
+    st: &mut State,
+    ws: &mut [u8],
+    recv: Elem,
+    emit: Elem,
+    on_recv: bool,
+) -> Option<usize> {
+    let mut kids = [Elem::NONE; MAX_KIDS];
+    let side = if on_recv { recv } else { emit };
+    if !st.links.fits(&st.blocks, MAX_KIDS as u32) {
+        return None;
+    }
+    let n = children(st, ws, side, &mut kids)?;
+    for &k in &kids[..n] {
+        if on_recv {
+            add_link(st, ws, k, emit, PENDING)?;
+        } else {
+            add_link(st, ws, recv, k, PENDING)?;
+        }
+    }
+    Some(n)
+}

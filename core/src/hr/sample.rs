@@ -1,0 +1,60 @@
+//! Points on elements for visibility rays and cluster transfers, chosen deterministically
+//! from a hash of the two elements and the ray number.
+
+use super::ids::{Elem, Kind};
+use super::state::State;
+use crate::sampling::{hash3, point_on, unit2};
+use glam::Vec3;
+
+/// A point on a surface inside `e` (area-weighted descent through clusters), and the input
+/// polygon it lies on. `seed` varies the choice.
+pub(crate) fn point_in(s: &State, ws: &[u8], e: Elem, seed: u32) -> (Vec3, u32) {
+    let mut cur = e;
+    let mut h = seed;
+    // Clusters nest at most a few hundred deep (scene nesting plus grouping levels); bound
+    // the walk anyway.
+    for _ in 0..4096 {
+        match cur.kind() {
+            Kind::Cluster => {
+                let c = s.cluster(ws, cur.index());
+                if c.child_count == 0 || c.area <= 0.0 {
+                    let p = (Vec3::from(c.bbox_min) + Vec3::from(c.bbox_max)) * 0.5;
+                    return (p, crate::limits::NONE);
+                }
+                h = hash3(h, cur.0, 0x5EED);
+                let target = (h >> 8) as f32 * (1.0 / 16_777_216.0) * c.area;
+                let mut acc = 0.0f32;
+                let mut pick = s.child(ws, c.children + c.child_count - 1);
+                for k in 0..c.child_count {
+                    let child = s.child(ws, c.children + k);
+                    acc += area(s, ws, child);
+                    if target < acc {
+                        pick = child;
+                        break;
+                    }
+                }
+                cur = pick;
+            }
+            Kind::Source => return (Vec3::ZERO, crate::limits::NONE),
+            _ => {
+                let p = s.patch(ws, cur);
+                let mut corners = [Vec3::ZERO; 4];
+                for (c, src) in corners.iter_mut().zip(p.corners) {
+                    *c = src.into();
+                }
+                let (u, v) = unit2(hash3(h, cur.0, 0xC0FFEE));
+                return (point_on(&corners[..p.corner_count()], u, v), p.poly);
+            }
+        }
+    }
+    (Vec3::ZERO, crate::limits::NONE)
+}
+
+/// Surface area inside an element (one side, m^2).
+pub(crate) fn area(s: &State, ws: &[u8], e: Elem) -> f32 {
+    match e.kind() {
+        Kind::Cluster => s.cluster(ws, e.index()).area,
+        Kind::Source => 0.0,
+        _ => s.patch(ws, e).area,
+    }
+}

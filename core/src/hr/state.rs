@@ -1,0 +1,274 @@
+//! The solver's state: the workspace bytes, where things are in them, and typed access to
+//! elements, values and links.
+
+use super::ids::{Elem, Kind};
+use super::layout::Layout;
+use super::pool::{Blocks, Pool, floats, floats_mut, read, write};
+use super::records::*;
+use super::{Settings, Stats};
+use crate::limits::NONE;
+use glam::Vec3;
+
+/// Everything the solver knows, minus the workspace bytes (kept apart so that phases can
+/// borrow the bytes shared and a scratch buffer mutably at the same time).
+#[derive(Clone, Debug)]
+pub(crate) struct State {
+    pub lay: Layout,
+    pub blocks: Blocks,
+    /// One-sided and two-sided patches.
+    pub patches: [Pool; 2],
+    pub links: Pool,
+    pub settings: Settings,
+    pub bands: usize,
+    /// Clusters created so far.
+    pub clusters: u32,
+    /// Input polygons loaded so far.
+    pub polygons: u32,
+    /// Entries of the child-list array used so far.
+    pub child_entries: u32,
+    /// Largest radiosity-weighted emitted power in any band (W): epsilon's unit.
+    pub power: f32,
+    /// Minimum patch area (m^2).
+    pub min_area: f32,
+    /// Length beyond which a ray towards a directional source has left the scene (m).
+    pub far: f32,
+    pub stats: Stats,
+}
+
+/// Geometry of an element, as the evaluation needs it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Shape {
+    Patch {
+        corners: [Vec3; 4],
+        n: usize,
+        normal: Vec3,
+        poly: u32,
+        area: f32,
+        two_sided: bool,
+    },
+    Cluster {
+        min: Vec3,
+        max: Vec3,
+        area: f32,
+    },
+    Source {
+        towards: Vec3,
+    },
+}
+
+impl State {
+    pub(crate) fn pool(&self, k: Kind) -> &Pool {
+        match k {
+            Kind::Patch2 => &self.patches[1],
+            _ => &self.patches[0],
+        }
+    }
+
+    /// Byte offset of an element's record.
+    pub(crate) fn at(&self, ws: &[u8], e: Elem) -> usize {
+        let s = &self.lay.strides;
+        match e.kind() {
+            Kind::Cluster => self.lay.clusters + e.index() as usize * s.cluster,
+            Kind::Source => self.lay.sources + e.index() as usize * s.source,
+            k => self.pool(k).at(ws, &self.blocks, e.index()),
+        }
+    }
+
+    /// Byte offset of an element's values.
+    fn values_at(&self, ws: &[u8], e: Elem) -> usize {
+        self.at(ws, e)
+            + match e.kind() {
+                Kind::Cluster => core::mem::size_of::<Cluster>(),
+                Kind::Source => core::mem::size_of::<Source>(),
+                _ => core::mem::size_of::<Patch>(),
+            }
+    }
+
+    /// Sides an element keeps values for: 2 for two-sided patches, else 1.
+    pub(crate) fn sides(e: Elem) -> usize {
+        if e.kind() == Kind::Patch2 { 2 } else { 1 }
+    }
+
+    /// Radiosity of side `side` (W/m^2 per band); sources give their irradiance, clusters
+    /// their mean radiosity (power over one-sided area). A side an element does not keep
+    /// is `None` (it emits nothing).
+    pub(crate) fn b<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
+        if side >= Self::sides(e) {
+            return None;
+        }
+        let nb = self.bands;
+        Some(floats(ws, self.values_at(ws, e) + 4 * nb * side, nb))
+    }
+
+    pub(crate) fn b_mut<'a>(&self, ws: &'a mut [u8], e: Elem, side: usize) -> &'a mut [f32] {
+        let nb = self.bands;
+        let at = self.values_at(ws, e) + 4 * nb * side;
+        floats_mut(ws, at, nb)
+    }
+
+    /// Irradiance of side `side` (W/m^2 per band; for clusters the flux density on a plane
+    /// facing the light). Sources keep none.
+    pub(crate) fn h<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> &'a [f32] {
+        let nb = self.bands;
+        let sides = Self::sides(e);
+        floats(
+            ws,
+            self.values_at(ws, e) + 4 * nb * (sides + side.min(sides - 1)),
+            nb,
+        )
+    }
+
+    pub(crate) fn h_mut<'a>(&self, ws: &'a mut [u8], e: Elem, side: usize) -> &'a mut [f32] {
+        let nb = self.bands;
+        let sides = Self::sides(e);
+        let at = self.values_at(ws, e) + 4 * nb * (sides + side.min(sides - 1));
+        floats_mut(ws, at, nb)
+    }
+
+    pub(crate) fn patch(&self, ws: &[u8], e: Elem) -> Patch {
+        read(ws, self.at(ws, e))
+    }
+
+    pub(crate) fn set_patch(&self, ws: &mut [u8], e: Elem, p: &Patch) {
+        let at = self.at(ws, e);
+        write(ws, at, p)
+    }
+
+    pub(crate) fn cluster(&self, ws: &[u8], i: u32) -> Cluster {
+        read(
+            ws,
+            self.lay.clusters + i as usize * self.lay.strides.cluster,
+        )
+    }
+
+    pub(crate) fn set_cluster(&self, ws: &mut [u8], i: u32, c: &Cluster) {
+        write(
+            ws,
+            self.lay.clusters + i as usize * self.lay.strides.cluster,
+            c,
+        )
+    }
+
+    pub(crate) fn polygon(&self, ws: &[u8], i: u32) -> Polygon {
+        read(
+            ws,
+            self.lay.polygons + i as usize * core::mem::size_of::<Polygon>(),
+        )
+    }
+
+    pub(crate) fn material(&self, ws: &[u8], i: u32) -> Material {
+        read(
+            ws,
+            self.lay.materials + i as usize * core::mem::size_of::<Material>(),
+        )
+    }
+
+    pub(crate) fn child(&self, ws: &[u8], entry: u32) -> Elem {
+        Elem(read(ws, self.lay.children + 4 * entry as usize))
+    }
+
+    /// The head of an element's received-link list.
+    pub(crate) fn links_head(&self, ws: &[u8], e: Elem) -> u32 {
+        match e.kind() {
+            Kind::Cluster => self.cluster(ws, e.index()).links,
+            Kind::Source => NONE,
+            _ => self.patch(ws, e).links,
+        }
+    }
+
+    pub(crate) fn set_links_head(&self, ws: &mut [u8], e: Elem, head: u32) {
+        match e.kind() {
+            Kind::Cluster => {
+                let mut c = self.cluster(ws, e.index());
+                c.links = head;
+                self.set_cluster(ws, e.index(), &c);
+            }
+            Kind::Source => {}
+            _ => {
+                let mut p = self.patch(ws, e);
+                p.links = head;
+                self.set_patch(ws, e, &p);
+            }
+        }
+    }
+
+    pub(crate) fn link(&self, ws: &[u8], i: u32) -> Link {
+        read(ws, self.links.at(ws, &self.blocks, i))
+    }
+
+    pub(crate) fn set_link(&self, ws: &mut [u8], i: u32, l: &Link) {
+        let at = self.links.at(ws, &self.blocks, i);
+        write(ws, at, l)
+    }
+
+    /// A link's coefficients (`link_k` of them).
+    pub(crate) fn link_k<'a>(&self, ws: &'a [u8], i: u32) -> &'a [f32] {
+        let at = self.links.at(ws, &self.blocks, i) + core::mem::size_of::<Link>();
+        floats(ws, at, self.lay.strides.link_k)
+    }
+
+    pub(crate) fn link_k_mut<'a>(&self, ws: &'a mut [u8], i: u32) -> &'a mut [f32] {
+        let at = self.links.at(ws, &self.blocks, i) + core::mem::size_of::<Link>();
+        floats_mut(ws, at, self.lay.strides.link_k)
+    }
+
+    /// Geometry of an element.
+    pub(crate) fn shape(&self, ws: &[u8], e: Elem) -> Shape {
+        match e.kind() {
+            Kind::Cluster => {
+                let c = self.cluster(ws, e.index());
+                Shape::Cluster {
+                    min: c.bbox_min.into(),
+                    max: c.bbox_max.into(),
+                    area: c.area,
+                }
+            }
+            Kind::Source => {
+                let s: Source = read(ws, self.at(ws, e));
+                Shape::Source {
+                    towards: s.towards.into(),
+                }
+            }
+            k => {
+                let p = self.patch(ws, e);
+                let poly = self.polygon(ws, p.poly);
+                let mut corners = [Vec3::ZERO; 4];
+                for (c, src) in corners.iter_mut().zip(p.corners) {
+                    *c = src.into();
+                }
+                Shape::Patch {
+                    corners,
+                    n: p.corner_count(),
+                    normal: poly.normal.into(),
+                    poly: p.poly,
+                    area: p.area,
+                    two_sided: k == Kind::Patch2,
+                }
+            }
+        }
+    }
+
+    /// Bytes of the workspace in use: the static part and the blocks handed out.
+    pub(crate) fn bytes_in_use(&self) -> usize {
+        self.lay.static_bytes + self.blocks.used as usize * self.blocks.size
+    }
+
+    /// Every receiver, in the fixed order the solver walks them: clusters, one-sided
+    /// patches, two-sided patches.
+    pub(crate) fn receiver_count(&self) -> u64 {
+        self.clusters as u64 + self.patches[0].len as u64 + self.patches[1].len as u64
+    }
+
+    /// The `i`-th receiver in that order.
+    pub(crate) fn receiver(&self, i: u64) -> Elem {
+        let c = self.clusters as u64;
+        let p1 = self.patches[0].len as u64;
+        if i < c {
+            Elem::new(Kind::Cluster, i as u32)
+        } else if i < c + p1 {
+            Elem::new(Kind::Patch1, (i - c) as u32)
+        } else {
+            Elem::new(Kind::Patch2, (i - c - p1) as u32)
+        }
+    }
+}
