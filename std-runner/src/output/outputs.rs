@@ -19,19 +19,19 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// Renames the finished files into place and returns the comparison, if any.
+    /// Renames the finished files into place, then returns the comparison, if any (a
+    /// reference that does not match is reported after the files are written).
     pub fn finish(self) -> anyhow::Result<Option<Comparison>> {
-        let comparison = match self.reference {
-            Some(r) => Some(r.finish().map_err(|e| anyhow!("reference: {e}"))?),
-            None => None,
-        };
         if let Some(r) = self.results {
             r.finish()?;
         }
         if let Some(i) = self.image {
             i.finish()?;
         }
-        Ok(comparison)
+        match self.reference {
+            Some(r) => Ok(Some(r.finish().map_err(|e| anyhow!("reference: {e}"))?)),
+            None => Ok(None),
+        }
     }
 }
 

@@ -46,7 +46,8 @@ pub fn exposure(frame: &Frame) -> f32 {
     }
     let k = ((lit.len() - 1) as f64 * EXPOSURE_PERCENTILE).floor() as usize;
     let (_, &mut at, _) = lit.select_nth_unstable_by(k, f32::total_cmp);
-    EXPOSURE_TARGET / at
+    let scale = EXPOSURE_TARGET / at;
+    if scale.is_finite() { scale } else { f32::MAX }
 }
 
 /// The sRGB transfer curve of a linear value in [0, 1].

@@ -188,11 +188,15 @@ pub fn compare(
 /// Compares polygons against a reference as the solver hands them over, so that the
 /// solution never has to be held: a [`Sink`] whose [`ReferenceSink::finish`] gives the
 /// same [`Comparison`] as [`compare`] on the whole table.
+///
+/// A mismatch never stops the solve (its other outputs are still worth having): the sink
+/// keeps the first one and [`ReferenceSink::finish`] reports it.
 #[derive(Clone, Debug)]
 pub struct ReferenceSink {
     reference: ResultsTable,
-    next: usize,
+    seen: u64,
     acc: Accumulator,
+    failed: Option<CompareError>,
 }
 
 impl ReferenceSink {
@@ -207,35 +211,39 @@ impl ReferenceSink {
         let acc = Accumulator::new(bands, two_sided && reference.two_sided);
         Ok(ReferenceSink {
             reference,
-            next: 0,
+            seen: 0,
             acc,
+            failed: None,
         })
     }
 
-    /// The comparison; refuses a solution with fewer polygons than the reference.
+    /// Polygons in the reference (check it against the scene's before a long solve).
+    pub fn reference_polygons(&self) -> u64 {
+        self.reference.len() as u64
+    }
+
+    /// The comparison, or the first mismatch; refuses a solution with a different number
+    /// of polygons than the reference.
     pub fn finish(self) -> Result<Comparison, CompareError> {
-        if self.next != self.reference.len() {
+        if self.seen != self.reference.len() as u64 {
             return refuse(format!(
                 "the results have {} polygons but the reference has {}",
-                self.next,
+                self.seen,
                 self.reference.len()
             ));
         }
+        if let Some(e) = self.failed {
+            return Err(e);
+        }
         self.acc.finish()
     }
-}
 
-impl Sink for ReferenceSink {
-    type Error = CompareError;
-
-    fn polygon(&mut self, p: &PolygonResult<'_>) -> Result<(), CompareError> {
-        let row = self.next;
+    /// Checks one polygon against the next reference row and adds it to the sums.
+    fn take(&mut self, p: &PolygonResult<'_>) -> Result<(), CompareError> {
+        let row = self.seen as usize;
         if row >= self.reference.len() {
-            return refuse(format!(
-                "the results have more polygons than the reference's {} (polygon {})",
-                self.reference.len(),
-                p.id
-            ));
+            // Counted by `finish`.
+            return Ok(());
         }
         check_row(row, p.id, p.area, &self.reference)?;
         for side in 0..self.acc.sides {
@@ -257,7 +265,20 @@ impl Sink for ReferenceSink {
             p.radiosity,
             [r.radiosity(row, 0), r.radiosity(row, 1)],
         );
-        self.next += 1;
+        Ok(())
+    }
+}
+
+impl Sink for ReferenceSink {
+    type Error = core::convert::Infallible;
+
+    fn polygon(&mut self, p: &PolygonResult<'_>) -> Result<(), Self::Error> {
+        if self.failed.is_none()
+            && let Err(e) = self.take(p)
+        {
+            self.failed = Some(e);
+        }
+        self.seen += 1;
         Ok(())
     }
 }

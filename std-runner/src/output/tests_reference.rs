@@ -135,28 +135,28 @@ fn streaming_sink_matches_the_table_comparison() {
     }
     assert_eq!(sink.finish().unwrap(), want);
 
-    // Too few polygons, too many, and a wrong band count are refused.
+    // Too few polygons, too many, a wrong band count and a wrong id are refused at the end,
+    // without stopping the stream.
     let short = ReferenceSink::new(reference.clone(), 2, false).unwrap();
-    assert!(
-        short
-            .finish()
-            .unwrap_err()
-            .to_string()
-            .contains("0 polygons")
-    );
+    assert_eq!(short.reference_polygons(), 2);
+    let e = short.finish().unwrap_err().to_string();
+    assert!(e.contains("0 polygons"), "{e}");
     assert!(ReferenceSink::new(reference.clone(), 1, false).is_err());
-    let mut long = ReferenceSink::new(table(2, &[]), 2, false).unwrap();
-    let p = PolygonResult {
-        id: 0,
+    let p = |id: u64| PolygonResult {
+        id,
         area: 1.0,
         two_sided: false,
-        radiosity: [&[1.0, 1.0], &[]],
+        radiosity: [&[2.0, 1.0], &[]],
         irradiance: [&[0.0, 0.0], &[]],
     };
-    assert!(
-        long.polygon(&p)
-            .unwrap_err()
-            .to_string()
-            .contains("more polygons")
-    );
+    let mut long = ReferenceSink::new(table(2, &[]), 2, false).unwrap();
+    let Ok(()) = long.polygon(&p(0));
+    let e = long.finish().unwrap_err().to_string();
+    assert!(e.contains("1 polygons but the reference has 0"), "{e}");
+    let mut wrong = ReferenceSink::new(reference.clone(), 2, false).unwrap();
+    for id in [0, 4] {
+        let Ok(()) = wrong.polygon(&p(id));
+    }
+    let e = wrong.finish().unwrap_err().to_string();
+    assert!(e.contains("row 2: polygon 4"), "{e}");
 }
