@@ -31,7 +31,7 @@ pub use progress::Progress;
 pub use raster::Rasterizer;
 pub use reference::{CompareError, Comparison, ReferenceSink, compare};
 pub use results::{ResultsFile, ResultsTable, ResultsWriter};
-pub use results_read::{TableError, read_results};
+pub use results_read::{TableError, read_results, read_results_file};
 pub use stats::SolveReport;
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 use super::results::{ResultsTable, field_count, header};
 use hirad_core::limits::MAX_BANDS;
 use std::fmt;
+use std::path::Path;
 
 /// A fault in a results table, located by 1-based line and byte column.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -57,6 +58,13 @@ fn shown(text: &[u8]) -> String {
         out.push_str("...");
     }
     out
+}
+
+/// Reads a table file; errors name the file and the line:column of the fault.
+pub fn read_results_file(path: &Path) -> anyhow::Result<ResultsTable> {
+    let bytes =
+        std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    read_results(&bytes).map_err(|e| anyhow::anyhow!("{}:{e}", path.display()))
 }
 
 /// Parses a whole table. Accepts `\n` or `\r\n` line ends, an optional final newline and a

@@ -2,7 +2,7 @@
 //! errors, and no panic on any input.
 
 use super::results::{ResultsTable, ResultsWriter, header};
-use super::results_read::read_results;
+use super::results_read::{read_results, read_results_file};
 use hirad_core::sink::{PolygonResult, Sink};
 use proptest::prelude::*;
 
@@ -253,4 +253,20 @@ proptest! {
             prop_assert!(e.line >= 1 && e.column >= 1);
         }
     }
+}
+
+#[test]
+fn file_errors_name_the_file_and_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ref.csv");
+    std::fs::write(&path, "id,area,rad_0,irr_0\n0,1,2,3\n1,1,2,x\n").unwrap();
+    let e = read_results_file(&path).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!("{}:3:7: `x` is not a finite decimal number", path.display())
+    );
+    let e = read_results_file(&dir.path().join("missing.csv"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("missing.csv: cannot read"), "{e}");
 }
