@@ -77,8 +77,11 @@ pub(crate) struct Layout {
     /// The executor's scratch: the last `scratch_floats` floats of the workspace, after
     /// `main_bytes`.
     pub scratch_floats: usize,
-    /// Bytes before the scratch (everything else lives there).
+    /// Bytes before the BVH and the scratch (everything else lives there).
     pub main_bytes: usize,
+    /// Bytes of the core's own BVH (nodes, then primitive order), after `main_bytes`; 0 when
+    /// the caller brings its own visibility.
+    pub bvh_bytes: usize,
     pub tables: [usize; 3],
     pub blocks_base: usize,
     pub block_size: usize,
@@ -112,6 +115,7 @@ impl Layout {
         sources: u32,
         bands: usize,
         settings: &Settings,
+        internal_bvh: bool,
         total: usize,
     ) -> Option<Layout> {
         let any_two = census.polys_two_sided > 0;
@@ -138,7 +142,16 @@ impl Layout {
         let scratch_floats = CHUNK * strides.eval_out().max(strides.gather_out());
         let _ = settings;
         let before_tables = at;
-        let total = total.checked_sub(up(scratch_floats * 4))? / ALIGN * ALIGN;
+        let bvh_bytes = if internal_bvh {
+            up(crate::bvh::bytes_needed(n_polygons))
+        } else {
+            0
+        };
+        let total = total
+            .checked_sub(up(scratch_floats * 4))?
+            .checked_sub(bvh_bytes)?
+            / ALIGN
+            * ALIGN;
         if before_tables > total {
             return None;
         }
@@ -172,11 +185,12 @@ impl Layout {
             group: group_at,
             scratch_floats,
             main_bytes: total,
+            bvh_bytes,
             tables,
             blocks_base,
             block_size: size,
             block_count: count,
-            static_bytes: blocks_base + up(scratch_floats * 4),
+            static_bytes: blocks_base + up(scratch_floats * 4) + bvh_bytes,
             fixed_bytes: before_tables,
             n_clusters,
             n_polygons,

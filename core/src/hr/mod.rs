@@ -30,6 +30,7 @@ mod refine;
 mod sample;
 mod solve;
 mod state;
+mod vis;
 
 pub use census::{Census, census, census_scratch_bytes, grouping_clusters};
 pub use exec::{Executor, NoProgress, Progress, Sequential};
@@ -217,14 +218,16 @@ fn aligned(ws: &mut [u8]) -> &mut [u8] {
 }
 
 /// Plans a solve: the exact minimum and a suggested workspace size. `scratch` must hold
-/// [`census_scratch_bytes`].
+/// [`census_scratch_bytes`]. `internal_bvh`: whether the solve will build the core's own BVH
+/// in the workspace (no visibility given to [`solve`]) rather than use the caller's.
 pub fn plan<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
+    internal_bvh: bool,
     scratch: &mut [u8],
 ) -> Result<Plan, HrError> {
     let c = census(view, settings.max_children, scratch)?;
-    plan_from(view, settings, &c)
+    plan_from(view, settings, internal_bvh, &c)
 }
 
 fn sources<S: SceneSource>(view: &SceneView<S>) -> u32 {
@@ -234,6 +237,7 @@ fn sources<S: SceneSource>(view: &SceneView<S>) -> u32 {
 fn plan_from<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
+    internal: bool,
     c: &Census,
 ) -> Result<Plan, HrError> {
     let info = view.info();
@@ -244,6 +248,7 @@ fn plan_from<S: SceneSource>(
         sources(view),
         bands,
         settings,
+        internal,
         usize::MAX / 4,
     )
     .ok_or(HrError::SceneTooLarge)?;
@@ -255,6 +260,7 @@ fn plan_from<S: SceneSource>(
             sources(view),
             bands,
             settings,
+            internal,
             total as usize,
         ) else {
             return false;
@@ -289,12 +295,14 @@ fn plan_from<S: SceneSource>(
         }
     }
     let min_bytes = hi + ALIGN as u64;
-    // Refinement typically ends near a few patches and some tens of links per polygon at
-    // epsilon 1e-3, growing about as 1/sqrt(epsilon).
-    let scale = libm::sqrtf(1e-3 / settings.epsilon.max(1e-9)).clamp(0.25, 64.0) as f64;
+    // Refinement typically ends near some patches and tens of links per polygon at epsilon
+    // 1e-3, plus a few thousand for the large surfaces of a room, growing about as
+    // 1/epsilon; never suggest less than 16 MiB (nothing on a desktop; embedded callers set
+    // their own budget).
+    let scale = (1e-3 / settings.epsilon.max(1e-9)).clamp(0.1, 1000.0) as f64;
     let polys = c.polygons() as f64;
-    let patches = polys * 4.0 * scale;
-    let links = (polys * 40.0 + 10_000.0) * scale;
+    let patches = (polys * 8.0 + 4096.0) * scale;
+    let links = (polys * 60.0 + 8192.0) * scale;
     let patch_avg = if polys > 0.0 {
         (c.polys_one_sided as f64 * st.patch1 as f64 + c.polys_two_sided as f64 * st.patch2 as f64)
             / polys
@@ -302,13 +310,16 @@ fn plan_from<S: SceneSource>(
         st.patch1 as f64
     };
     let grow = patches * patch_avg + links * st.link as f64;
-    let suggested = (min_bytes as f64 + grow * 1.05).min(u64::MAX as f64 / 2.0) as u64;
+    let suggested = (min_bytes as f64 + grow * 1.05)
+        .max(16.0 * 1024.0 * 1024.0)
+        .min(u64::MAX as f64 / 2.0) as u64;
     let at_min = Layout::new(
         c,
         info.materials,
         sources(view),
         bands,
         settings,
+        internal,
         min_bytes as usize,
     )
     .ok_or(HrError::SceneTooLarge)?;
@@ -325,11 +336,13 @@ fn plan_from<S: SceneSource>(
 /// Solves the scene and hands every polygon to `sink` in global-id order.
 ///
 /// `workspace` is all the memory the solver uses; [`plan`] says how much a scene needs.
+/// `visibility`: the caller's ray caster (polygon ids are global ids), or `None` for the
+/// core's own BVH, built in the workspace.
 pub fn solve<S, V, K, E, P>(
     view: &SceneView<S>,
     settings: &Settings,
     workspace: &mut [u8],
-    visibility: &V,
+    visibility: Option<&V>,
     executor: &mut E,
     progress: &mut P,
     sink: &mut K,
@@ -355,7 +368,8 @@ where
     if c.polygons() == 0 {
         return Err(HrError::Empty.into());
     }
-    let plan = plan_from(view, settings, &c)?;
+    let internal = visibility.is_none();
+    let plan = plan_from(view, settings, internal, &c)?;
     let info = view.info();
     let lay = Layout::new(
         &c,
@@ -363,12 +377,14 @@ where
         sources(view),
         info.bands as usize,
         settings,
+        internal,
         ws.len(),
     )
     .ok_or(HrError::WorkspaceTooSmall {
         needed: plan.min_bytes,
     })?;
-    let (ws, scratch_bytes) = ws.split_at_mut(lay.main_bytes);
+    let (ws, rest) = ws.split_at_mut(lay.main_bytes);
+    let (bvh_bytes, scratch_bytes) = rest.split_at_mut(lay.bvh_bytes);
     let scratch: &mut [f32] = bytemuck::try_cast_slice_mut(
         &mut scratch_bytes[..lay.scratch_floats * 4],
     )
@@ -381,16 +397,38 @@ where
         },
         e => e,
     })?;
+    let vis = match visibility {
+        Some(v) => vis::Vis::External(v),
+        None => {
+            let n = st.polygons as usize;
+            let (nodes, order) = bvh_bytes.split_at_mut(
+                crate::bvh::nodes_needed(st.polygons) * core::mem::size_of::<crate::bvh::BvhNode>(),
+            );
+            let nodes: &mut [crate::bvh::BvhNode] =
+                bytemuck::try_cast_slice_mut(nodes).map_err(|_| HrError::SceneTooLarge)?;
+            let order: &mut [u32] = bytemuck::try_cast_slice_mut(&mut order[..4 * n])
+                .map_err(|_| HrError::SceneTooLarge)?;
+            let polys = vis::WsPolygons { st: &st, ws };
+            let bvh = crate::bvh::build(
+                st.polygons,
+                |id| crate::bvh::PolygonSet::bounds(&polys, id),
+                nodes,
+                order,
+            )
+            .map_err(|_| HrError::SceneTooLarge)?;
+            vis::Vis::Internal(bvh)
+        }
+    };
     st.stats.workspace_bytes = total as u64;
     progress.report("loaded", st.polygons as u64, st.polygons as u64);
     let mut seq = exec::Fallback {
         inner: executor,
         scratch,
     };
-    refine::evaluate_pending(&mut st, ws, visibility, &mut seq);
+    refine::evaluate_pending(&mut st, ws, &vis, &mut seq);
     for round in 0..settings.max_rounds {
         st.stats.rounds = round + 1;
-        let refined = refine::refine_until_stable(&mut st, ws, visibility, &mut seq, progress);
+        let refined = refine::refine_until_stable(&mut st, ws, &vis, &mut seq, progress);
         closure::update(&mut st, ws, &mut seq);
         solve::iterate(&mut st, ws, &mut seq, progress);
         if !refined && round > 0 {
@@ -399,6 +437,8 @@ where
         refine::clear_examined(&mut st, ws);
     }
     st.stats.links = st.links.live() as u64;
+    st.stats.clusters = st.clusters as u64;
+    st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     progress.report("output", 0, st.polygons as u64);
     output::emit(&st, ws, sink).map_err(SolveError::Sink)?;

@@ -14,6 +14,7 @@ use super::ids::{Elem, Kind};
 use super::layout::CHUNK;
 use super::records::*;
 use super::state::{Shape, State};
+use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::NONE;
 use crate::sampling::subdivide;
 use crate::visibility::Visibility;
@@ -60,17 +61,17 @@ fn free_link(st: &mut State, ws: &mut [u8], i: u32) {
 }
 
 /// Context of a chunked phase: the state, the workspace, the visibility.
-struct Ctx<'a, V: ?Sized> {
+struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a mut State,
     ws: &'a mut [u8],
-    vis: &'a V,
+    vis: &'a Vis<'v, V>,
 }
 
 /// Computes the coefficients of every pending link.
 pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
     st: &mut State,
     ws: &mut [u8],
-    vis: &V,
+    vis: &Vis<'_, V>,
     ex: &mut Fallback<'_, E>,
 ) {
     let n = st.links.len as usize;
@@ -82,13 +83,17 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
         &mut ctx,
         n.div_ceil(CHUNK),
         CHUNK * out,
-        |c: &Ctx<'_, V>, chunk, buf| {
+        |c: &Ctx<'_, '_, V>, chunk, buf| {
+            let ray = Ray {
+                vis: c.vis,
+                polys: WsPolygons { st: c.st, ws: c.ws },
+            };
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                 let l = c.st.link(c.ws, i as u32);
                 if l.flags & (PENDING | FREE) != PENDING {
                     continue;
                 }
-                let co = evaluate(c.st, c.ws, Elem(l.recv), Elem(l.emit), c.vis);
+                let co = evaluate(c.st, c.ws, Elem(l.recv), Elem(l.emit), &ray);
                 let o = &mut buf[slot * out..(slot + 1) * out];
                 if kk == 1 {
                     o[0] = co.k[0][0];
@@ -100,7 +105,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 o[kk + 2] = co.rays as f32;
             }
         },
-        |c: &mut Ctx<'_, V>, chunk, buf| {
+        |c: &mut Ctx<'_, '_, V>, chunk, buf| {
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                 let mut l = c.st.link(c.ws, i as u32);
                 if l.flags & (PENDING | FREE) != PENDING {
@@ -122,7 +127,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
 pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progress>(
     st: &mut State,
     ws: &mut [u8],
-    vis: &V,
+    vis: &Vis<'_, V>,
     ex: &mut Fallback<'_, E>,
     progress: &mut P,
 ) -> bool {
@@ -291,7 +296,11 @@ fn choose(st: &State, ws: &[u8], recv: Elem, emit: Elem, rs: &Shape, es: &Shape)
     let emitter_refined = emit.is_patch() && st.patch(ws, emit).first_child != NONE;
     let prefer_emitter = match (recv.kind(), emit.kind()) {
         (_, Kind::Source) => false,
-        (Kind::Cluster, _) | (_, Kind::Cluster) => re > rr,
+        // Clusters open before any patch splits: their isotropic kernel ignores orientation
+        // (a lamp facing the floor would light it four times too weakly).
+        (Kind::Cluster, Kind::Cluster) => re > rr,
+        (Kind::Cluster, _) => false,
+        (_, Kind::Cluster) => true,
         // Between patches the exact form factor already integrates over the emitter: split
         // it only when its radiosity is resolved finer (it has children) and it is larger.
         _ => emitter_refined && re >= rr,
