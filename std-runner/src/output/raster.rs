@@ -2,7 +2,7 @@
 //! which each pixel shows the radiance (B / pi, W/m^2/sr) of the side of the nearest patch
 //! that faces the camera. Only the framebuffer is held, never the patches.
 
-use super::camera::{OptionError, Projection, Size};
+use super::camera::{MAX_SIDE, OptionError, Projection, Size};
 use super::frame::Frame;
 use crate::scene::Camera;
 use anyhow::anyhow;
@@ -44,6 +44,13 @@ impl Rasterizer {
         supersample: u32,
         bands: usize,
     ) -> Result<Self, OptionError> {
+        let sides = [size.width, size.height];
+        if !sides.iter().all(|s| (1..=MAX_SIDE).contains(s)) {
+            return Err(OptionError(format!(
+                "an image of {}x{} pixels: each side must be from 1 to {MAX_SIDE}",
+                size.width, size.height
+            )));
+        }
         if !(1..=MAX_SUPERSAMPLE).contains(&supersample) {
             return Err(OptionError(format!(
                 "supersampling {supersample} is not from 1 to {MAX_SUPERSAMPLE}"

@@ -215,6 +215,11 @@ fn bad_patches_and_settings_are_refused() {
     }
     assert!(r.draw(&corners[..2], normal, [&[1.0; 3], &[]]).is_err());
     assert!(Rasterizer::new(&camera(), SIZE, 0, 3).is_err());
+    let flat = Size {
+        width: 4,
+        height: 0,
+    };
+    assert!(Rasterizer::new(&camera(), flat, 1, 3).is_err());
     assert!(Rasterizer::new(&camera(), SIZE, 9, 3).is_err());
     let huge = Size {
         width: 16384,
