@@ -137,7 +137,9 @@ impl Bvh<'_> {
     /// The nearest primitive along the segment `from..to`: `hit(id, t_max)` returns the
     /// parameter t in [0, t_max) at which the segment crosses primitive `id`, or `None`.
     /// Returns the id and t of the smallest t found (the first in traversal order on ties),
-    /// or `None` if nothing is crossed. Boxes entered beyond the best t so far are skipped.
+    /// or `None` if nothing is crossed. Boxes entered beyond the best t so far are skipped,
+    /// so a primitive whose own t rounds below the best while its box's entry rounds above
+    /// it (coplanar primitives) may be passed over: the result is nearest up to rounding.
     pub fn closest_hit(
         &self,
         from: Vec3,
