@@ -157,10 +157,9 @@ fn brute(polys: &[([Vec3; 4], u8)], from: Vec3, to: Vec3, skip: [u32; 2]) -> f32
         if skip.contains(&(i as u32)) {
             continue;
         }
-        if let Some(t) = segment_polygon(from, to - from, &c[..*k as usize]) {
-            if t > SEGMENT_MARGIN && t < 1.0 - SEGMENT_MARGIN {
-                return 0.0;
-            }
+        let t = segment_polygon(from, to - from, &c[..*k as usize]);
+        if t.is_some_and(|t| t > SEGMENT_MARGIN && t < 1.0 - SEGMENT_MARGIN) {
+            return 0.0;
         }
     }
     1.0
