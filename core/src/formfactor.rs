@@ -15,9 +15,42 @@ const MAX_CLIPPED: usize = 5;
 /// Form factor (dimensionless, 0..=1) from a differential area at `p` with unit normal `n` to
 /// the convex planar polygon `poly` (3 or 4 corners, either orientation), counting only the
 /// part in front of the tangent plane of `p`. Which side of the polygon faces `p` is the
-/// caller's concern (see [`facing_side`]).
+/// caller's concern (see [`facing_side`]). Computed in f32 relative to `p` (sums over a closed
+/// surface come to 1 within about 1e-6); [`point_polygon_f64`] is the slower exact one.
 pub fn point_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
-    point_polygon_f64(p.as_dvec3(), n.as_dvec3(), poly) as f32
+    let mut clipped = [Vec3::ZERO; MAX_CLIPPED];
+    let mut k = 0;
+    let m = poly.len().min(4);
+    for i in 0..m {
+        let a = poly[i] - p;
+        let b = poly[(i + 1) % m] - p;
+        let (da, db) = (n.dot(a), n.dot(b));
+        if da > 0.0 && k < MAX_CLIPPED {
+            clipped[k] = a;
+            k += 1;
+        }
+        if (da > 0.0) != (db > 0.0) && k < MAX_CLIPPED {
+            let t = da / (da - db);
+            if t.is_finite() {
+                clipped[k] = a + (b - a) * t;
+                k += 1;
+            }
+        }
+    }
+    if k < 3 {
+        return 0.0;
+    }
+    let mut sum = 0.0f32;
+    for i in 0..k {
+        let (a, b) = (clipped[i], clipped[(i + 1) % k]);
+        let c = a.cross(b);
+        let len = c.length();
+        if len <= 0.0 || !len.is_finite() {
+            continue;
+        }
+        sum += libm::atan2f(len, a.dot(b)) * n.dot(c) / len;
+    }
+    (sum.abs() / (2.0 * core::f32::consts::PI)).min(1.0)
 }
 
 /// [`point_polygon`] in f64, for sums that must close to 1 within 1e-9.
@@ -179,6 +212,17 @@ mod tests {
         let a = point_polygon(v(0.3e-3, 0.2e-3, 0.), Vec3::Z, &sq(1e-3));
         let b = point_polygon(v(0.3e3, 0.2e3, 0.), Vec3::Z, &sq(1e3));
         assert!((a - b).abs() < 1e-6, "{a} {b}");
+        // The f32 path closes a cube to 1e-6.
+        let p = Vec3::new(0.2, 0.7, 0.0);
+        let faces = [
+            [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+            [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
+            [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+            [v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
+        ];
+        let sum: f32 = faces.iter().map(|f| point_polygon(p, Vec3::Z, f)).sum();
+        assert!((sum - 1.0).abs() < 1e-6, "{sum}");
     }
 
     #[test]

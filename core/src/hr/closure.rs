@@ -40,12 +40,21 @@ pub(crate) fn update<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallba
             CHUNK * 2,
             |c: &Ctx<'_>, chunk, buf| {
                 for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                    let f = factors(c.st, c.ws, Elem::new(kind, i as u32));
+                    let e = Elem::new(kind, i as u32);
+                    // NaN marks "unchanged": only patches under changed links are redone.
+                    let f = if needs_update(c.st, c.ws, e) {
+                        factors(c.st, c.ws, e)
+                    } else {
+                        [f32::NAN; 2]
+                    };
                     buf[2 * slot..2 * slot + 2].copy_from_slice(&f);
                 }
             },
             |c: &mut Ctx<'_>, chunk, buf| {
                 for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    if buf[2 * slot].is_nan() {
+                        continue;
+                    }
                     let e = Elem::new(kind, i as u32);
                     let mut p = c.st.patch(c.ws, e);
                     p.closure = [buf[2 * slot], buf[2 * slot + 1]];
@@ -54,6 +63,34 @@ pub(crate) fn update<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallba
             },
         );
     }
+    // Everything is up to date now.
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        for i in 0..st.pool(kind).len {
+            let e = Elem::new(kind, i);
+            let mut p = st.patch(ws, e);
+            if p.stale() {
+                p.shape &= !super::records::STALE;
+                st.set_patch(ws, e, &p);
+            }
+        }
+    }
+}
+
+/// True if a leaf sub-patch or one of its ancestor patches had its links changed.
+fn needs_update(st: &State, ws: &[u8], e: Elem) -> bool {
+    let p = st.patch(ws, e);
+    if p.first_child != NONE || Elem(p.parent).kind() == Kind::Cluster {
+        return false;
+    }
+    let mut a = e;
+    while a.is_patch() {
+        let ap = st.patch(ws, a);
+        if ap.stale() {
+            return true;
+        }
+        a = Elem(ap.parent);
+    }
+    false
 }
 
 /// The irradiance of a leaf patch's side (W/m^2 per band): what it gathered and inherited

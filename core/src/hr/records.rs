@@ -35,6 +35,12 @@ impl Patch {
     pub(crate) fn depth(&self) -> u32 {
         (self.shape >> 8) & 0xFF
     }
+
+    /// True when the links this patch receives changed since its sub-patches' closure
+    /// factors were computed (or it is new).
+    pub(crate) fn stale(&self) -> bool {
+        self.shape & STALE != 0
+    }
 }
 
 /// A cluster: a box of elements exchanging light as an isotropic volume.
@@ -107,6 +113,9 @@ pub(crate) struct Link {
     /// partly or wholly hidden links).
     pub k_open: f32,
 }
+
+/// Patch `shape` bit: the patch's received links changed (see `Patch::stale`).
+pub(crate) const STALE: u32 = 1 << 16;
 
 /// The link's coefficients have not been computed yet.
 pub(crate) const PENDING: u32 = 1;

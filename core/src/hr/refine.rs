@@ -35,6 +35,7 @@ pub(crate) fn add_link(
     let i = st.links.alloc(ws, &mut blocks)?;
     st.blocks = blocks;
     let head = st.links_head(ws, recv);
+    mark_stale(st, ws, recv);
     st.set_link(
         ws,
         i,
@@ -273,7 +274,7 @@ fn subdivide_patch(st: &mut State, ws: &mut [u8], e: Elem, p: &Patch, pool: usiz
             poly: p.poly,
             links: NONE,
             area: shape,
-            shape: n as u32 | ((p.depth() + 1) << 8),
+            shape: n as u32 | ((p.depth() + 1) << 8) | STALE,
             closure: [1.0; 2],
         };
         st.set_patch(ws, child, &rec);
@@ -392,6 +393,17 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
     changed
 }
 
+/// Notes that a patch's received links changed: its sub-patches' closure is out of date.
+fn mark_stale(st: &State, ws: &mut [u8], e: Elem) {
+    if e.is_patch() {
+        let mut p = st.patch(ws, e);
+        if !p.stale() {
+            p.shape |= STALE;
+            st.set_patch(ws, e, &p);
+        }
+    }
+}
+
 fn mark_examined(st: &mut State, ws: &mut [u8], i: u32) {
     let mut l = st.link(ws, i);
     l.flags |= EXAMINED;
@@ -410,6 +422,7 @@ fn find_prev(st: &State, ws: &[u8], recv: Elem, target: u32) -> u32 {
 }
 
 fn unlink(st: &mut State, ws: &mut [u8], recv: Elem, prev: u32, _cur: u32, next: u32) {
+    mark_stale(st, ws, recv);
     if prev == NONE {
         st.set_links_head(ws, recv, next);
     } else {
