@@ -12,7 +12,7 @@
 //! power of two to a unit half-extent) and its boxes are padded by [`BOX_PAD`] of that unit,
 //! which makes the f32 box tests conservative at any scene scale.
 
-use glam::{DVec3, Vec3, Vec3A};
+use glam::{DVec3, UVec2, Vec3, Vec3A};
 use hirad_core::visibility::Visibility;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb as BvhAabb;
@@ -85,10 +85,12 @@ impl std::error::Error for VisibilityError {}
 pub struct ObvhsVisibility {
     /// `None` when there are no polygons.
     bvh: Option<CwBvh>,
-    /// World corners; a triangle repeats its last corner in slot 3.
-    corners: Vec<[Vec3; 4]>,
+    /// Per polygon, the triangles `a b c` and (quads only) `a c d`, prepared in f64.
+    triangles: Vec<[Prepared; 2]>,
     /// 3 or 4 per polygon.
     counts: Vec<u8>,
+    /// Padded boxes in the normalised frame, per polygon (for box queries).
+    boxes: Vec<BvhAabb>,
     /// Centre of the normalised frame (m).
     centre: Vec3,
     /// World-to-normalised scale (1/m), a power of two.
@@ -98,7 +100,7 @@ pub struct ObvhsVisibility {
 impl fmt::Debug for ObvhsVisibility {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("ObvhsVisibility")
-            .field("polygons", &self.corners.len())
+            .field("polygons", &self.triangles.len())
             .field("centre", &self.centre)
             .field("inv_scale", &self.inv_scale)
             .finish()
@@ -137,8 +139,9 @@ impl ObvhsVisibility {
         if corners.is_empty() {
             return Ok(ObvhsVisibility {
                 bvh: None,
-                corners,
+                triangles: Vec::new(),
                 counts,
+                boxes: Vec::new(),
                 centre: Vec3::ZERO,
                 inv_scale: 1.0,
             });
@@ -163,10 +166,18 @@ impl ObvhsVisibility {
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
+        let triangles = corners
+            .iter()
+            .map(|c| {
+                let [a, b, cc, d] = c.map(|v| v.as_dvec3());
+                [Prepared::new(a, b, cc), Prepared::new(a, cc, d)]
+            })
+            .collect();
         Ok(ObvhsVisibility {
             bvh: Some(bvh),
-            corners,
+            triangles,
             counts,
+            boxes,
             centre,
             inv_scale,
         })
@@ -174,20 +185,63 @@ impl ObvhsVisibility {
 
     /// Number of polygons.
     pub fn len(&self) -> usize {
-        self.corners.len()
+        self.counts.len()
     }
 
     /// True when there are no polygons (nothing ever blocks).
     pub fn is_empty(&self) -> bool {
-        self.corners.is_empty()
+        self.counts.is_empty()
     }
 
     /// True when polygon `id` crosses the open segment `o + t d`, `T_MARGIN < t < 1 - T_MARGIN`.
+    #[inline]
     fn blocks(&self, id: usize, o: DVec3, d: DVec3) -> bool {
-        let c = &self.corners[id];
-        let (a, b, cc) = (c[0].as_dvec3(), c[1].as_dvec3(), c[2].as_dvec3());
-        segment_crosses_triangle(o, d, a, b, cc)
-            || (self.counts[id] == 4 && segment_crosses_triangle(o, d, a, cc, c[3].as_dvec3()))
+        let t = &self.triangles[id];
+        t[0].crosses(o, d) || (self.counts[id] == 4 && t[1].crosses(o, d))
+    }
+
+    /// Writes into `out` (cleared first, ascending) every polygon other than `skip` whose box
+    /// overlaps the box `lo..hi`: a superset of the polygons that can block any segment lying
+    /// inside that box. Empty means every such segment is clear.
+    pub fn candidates(&self, lo: Vec3, hi: Vec3, skip: [u32; 2], out: &mut Vec<u32>) {
+        out.clear();
+        let Some(bvh) = &self.bvh else {
+            return;
+        };
+        let (l, h) = (
+            (lo - self.centre) * self.inv_scale,
+            (hi - self.centre) * self.inv_scale,
+        );
+        if !l.is_finite() || !h.is_finite() {
+            out.extend((0..self.len() as u32).filter(|id| !skip.contains(id)));
+            return;
+        }
+        let query = BvhAabb::new(Vec3A::from(l) - BOX_PAD, Vec3A::from(h) + BOX_PAD);
+        let mut state = bvh.new_traversal(Vec3A::ZERO);
+        let mut node;
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            node.intersect_aabb(&query, state.oct_inv4),
+            {
+                let id = bvh.primitive_indices[state.primitive_id as usize];
+                if !skip.contains(&id) && query.intersect_aabb(&self.boxes[id as usize]) {
+                    out.push(id);
+                }
+            }
+        );
+        out.sort_unstable();
+    }
+
+    /// [`Visibility::transmittance`] testing only the polygons in `candidates` (as filled by
+    /// [`ObvhsVisibility::candidates`] for a box that contains the segment): the same answer,
+    /// without walking the BVH.
+    #[inline]
+    pub fn transmittance_among(&self, from: Vec3, to: Vec3, candidates: &[u32]) -> f32 {
+        let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
+        let blocked = candidates.iter().any(|&id| self.blocks(id as usize, o, d));
+        if blocked { 0.0 } else { 1.0 }
     }
 }
 
@@ -201,31 +255,60 @@ fn inv_power_of_two(half: f32) -> f32 {
     2f32.powi(-(e as i32))
 }
 
-/// Exact segment-triangle test in f64 (Moller-Trumbore): does the segment `o + t d` cross the
-/// triangle `a b c` (edges included) with `T_MARGIN < t < 1 - T_MARGIN`? A segment parallel
-/// to the triangle's plane never crosses it. No absolute tolerance.
-pub fn segment_crosses_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let e1 = b - a;
-    let e2 = c - a;
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return false;
+/// A triangle prepared for the exact segment test, in f64: a corner, the unnormalised
+/// normal `n = (b - a) x (c - a)`, and the dual edge vectors that give barycentric
+/// coordinates of a point of its plane by two dot products.
+#[derive(Clone, Copy, Debug)]
+pub struct Prepared {
+    a: DVec3,
+    n: DVec3,
+    du: DVec3,
+    dv: DVec3,
+}
+
+impl Prepared {
+    /// Prepares the triangle `a b c` (a degenerate one never blocks).
+    pub fn new(a: DVec3, b: DVec3, c: DVec3) -> Prepared {
+        let (e1, e2) = (b - a, c - a);
+        let n = e1.cross(e2);
+        let n2 = n.length_squared();
+        if !(n2 > 0.0 && n2.is_finite()) {
+            return Prepared {
+                a,
+                n: DVec3::ZERO,
+                du: DVec3::ZERO,
+                dv: DVec3::ZERO,
+            };
+        }
+        Prepared {
+            a,
+            n,
+            du: e2.cross(n) / n2,
+            dv: n.cross(e1) / n2,
+        }
     }
-    let inv = 1.0 / det;
-    let s = o - a;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return false;
+
+    /// Does the segment `o + t d` cross the triangle (edges included) with
+    /// `T_MARGIN < t < 1 - T_MARGIN`? A segment parallel to the plane never crosses it; one
+    /// whose ends lie strictly on one side is rejected before any division. No absolute
+    /// tolerance.
+    #[inline]
+    pub fn crosses(&self, o: DVec3, d: DVec3) -> bool {
+        let so = self.n.dot(o - self.a);
+        let nd = self.n.dot(d);
+        let se = so + nd;
+        if nd == 0.0 || (so > 0.0 && se > 0.0) || (so < 0.0 && se < 0.0) {
+            return false;
+        }
+        let t = -so / nd;
+        let m = T_MARGIN as f64;
+        if !(t > m && t < 1.0 - m) {
+            return false;
+        }
+        let r = o + d * t - self.a;
+        let (u, v) = (r.dot(self.du), r.dot(self.dv));
+        u >= 0.0 && v >= 0.0 && u + v <= 1.0
     }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return false;
-    }
-    let t = e2.dot(q) * inv;
-    let m = T_MARGIN as f64;
-    t > m && t < 1.0 - m
 }
 
 impl Visibility for ObvhsVisibility {
@@ -271,7 +354,7 @@ impl ObvhsVisibility {
     /// the BVH's f32 frame.
     pub fn brute_force(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
         let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
-        let blocked = (0..self.corners.len())
+        let blocked = (0..self.len())
             .any(|id| id as u32 != skip[0] && id as u32 != skip[1] && self.blocks(id, o, d));
         if blocked { 0.0 } else { 1.0 }
     }
@@ -398,6 +481,46 @@ mod tests {
                 assert!(compared > 1900, "{compared}");
                 assert!(blocked > 200 && blocked < compared - 200, "{blocked}");
             }
+        }
+    }
+
+    #[test]
+    fn candidates_of_a_box_give_the_same_answers() {
+        for (seed, size) in [(11, 1.0f32), (12, 1e-3), (13, 1e3)] {
+            let polys = scene(seed, 300, size);
+            let vis = ObvhsVisibility::new(&polys).unwrap();
+            let mut rng = Rng(seed, 5_000_000);
+            let mut out = Vec::new();
+            let mut empty = 0;
+            for k in 0..400u32 {
+                let lo = rng.point(size);
+                let hi = lo + rng.point(size * 0.05);
+                let skip = [k % 300, NONE];
+                vis.candidates(lo, hi, skip, &mut out);
+                empty += out.is_empty() as usize;
+                // Every polygon whose own box overlaps the query is a candidate.
+                for (id, p) in polys.iter().enumerate() {
+                    let (mut a, mut b) = (p[0], p[0]);
+                    for v in p {
+                        a = a.min(*v);
+                        b = b.max(*v);
+                    }
+                    let overlaps = a.cmple(hi).all() && lo.cmple(b).all();
+                    if overlaps && !skip.contains(&(id as u32)) {
+                        assert!(out.binary_search(&(id as u32)).is_ok(), "{id}");
+                    }
+                }
+                // Segments inside the box: the candidates decide exactly as the BVH does.
+                for _ in 0..20 {
+                    let t = |r: &mut Rng| lo + (hi - lo) * Vec3::new(r.next(), r.next(), r.next());
+                    let (a, b) = (t(&mut rng), t(&mut rng));
+                    assert_eq!(
+                        vis.transmittance_among(a, b, &out),
+                        vis.transmittance(a, b, skip)
+                    );
+                }
+            }
+            assert!(empty > 20 && empty < 380, "{empty}");
         }
     }
 

@@ -1,0 +1,194 @@
+//! The full form factor matrix, one row per receiver element, computed in parallel with each
+//! row independent and in a fixed order, so that the matrix is bit-identical for any thread
+//! count.
+//!
+//! `F[(i, r), (j, s)] = sum_q w_q * point_polygon(x_q, n_r, j) * V(x_q, j)` over the
+//! quadrature points `x_q` of element `i` whose view of `j` shows side `s` of `j`, where `r`
+//! is the receiving side of `i` (its front normal, or the opposite one for the back of a
+//! two-sided element) and `V` is the fraction of jittered rays from `x_q` to `j` that pass.
+//! Sides that cannot emit (the back of a one-sided element) get no entry. Rays go through
+//! [`PairRays`], which may know a pair to be clear without casting any.
+
+use super::mesh::{Element, Mesh};
+use super::quadrature::Quadrature;
+use super::rays::{Pair, PairRays};
+use glam::Vec3;
+use hirad_core::formfactor::{facing_side, point_polygon};
+use hirad_core::geometry::Aabb;
+use hirad_core::sampling::{hash3, point_on, unit2};
+use rayon::prelude::*;
+
+/// One non-zero form factor: the emitting slot and the value (dimensionless).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Entry {
+    /// Radiosity slot of the emitting side.
+    pub slot: u32,
+    /// Form factor from the receiving side to that emitting side.
+    pub value: f32,
+}
+
+/// The form factors of one receiver element, per receiving side.
+#[derive(Clone, Debug, Default)]
+pub struct Row {
+    /// Entries of the front side.
+    pub front: Vec<Entry>,
+    /// Entries of the back side (empty for one-sided elements).
+    pub back: Vec<Entry>,
+}
+
+/// The matrix and what it cost.
+#[derive(Clone, Debug, Default)]
+pub struct Matrix {
+    /// One row per element.
+    pub rows: Vec<Row>,
+    /// Element pairs whose form factor was evaluated.
+    pub pairs: u64,
+    /// Visibility rays cast.
+    pub rays: u64,
+    /// Pairs with a non-zero form factor known to be unoccluded without casting rays.
+    pub clear_pairs: u64,
+}
+
+impl Matrix {
+    /// Non-zero entries stored.
+    pub fn entries(&self) -> u64 {
+        self.rows
+            .iter()
+            .map(|r| (r.front.len() + r.back.len()) as u64)
+            .sum()
+    }
+
+    /// Bytes of the stored entries (row headers included).
+    pub fn bytes(&self) -> u64 {
+        self.entries() * size_of::<Entry>() as u64 + (self.rows.len() * size_of::<Row>()) as u64
+    }
+}
+
+/// What computing one row cost.
+#[derive(Clone, Copy, Debug, Default)]
+struct Cost {
+    pairs: u64,
+    rays: u64,
+    clear_pairs: u64,
+}
+
+/// Computes every row; `rays` visibility rays per quadrature point and emitter.
+pub fn build<R: PairRays + ?Sized>(
+    mesh: &Mesh,
+    quad: &Quadrature,
+    rays: u32,
+    visibility: &R,
+) -> Matrix {
+    let results: Vec<(Row, Cost)> = (0..mesh.elements.len())
+        .into_par_iter()
+        .map(|i| row(mesh, quad, rays, visibility, i))
+        .collect();
+    let mut m = Matrix::default();
+    m.rows.reserve(results.len());
+    for (r, cost) in results {
+        m.rows.push(r);
+        m.pairs += cost.pairs;
+        m.rays += cost.rays;
+        m.clear_pairs += cost.clear_pairs;
+    }
+    m
+}
+
+/// Row of element `i`, and what it cost.
+fn row<R: PairRays + ?Sized>(
+    mesh: &Mesh,
+    quad: &Quadrature,
+    rays: u32,
+    visibility: &R,
+    i: usize,
+) -> (Row, Cost) {
+    let ei = &mesh.elements[i];
+    let (points, weights) = quad.of(i);
+    let mut out = Row::default();
+    let mut cost = Cost::default();
+    let mut candidates = Vec::new();
+    for (j, ej) in mesh.elements.iter().enumerate() {
+        // Pieces of one polygon are coplanar: they exchange nothing.
+        if ej.polygon == ei.polygon {
+            continue;
+        }
+        // acc[receiving side][emitting side]
+        let mut acc = [[0.0f64; 2]; 2];
+        let mut evaluated = false;
+        let skip = [ei.polygon, ej.polygon];
+        // Classified on the first point that needs rays.
+        let mut pair = None;
+        for (q, (&x, &w)) in points.iter().zip(weights).enumerate() {
+            let Some(s) = facing_side(x, ej.corners[0], ej.normal) else {
+                continue;
+            };
+            if s == 1 && !ej.two_sided() {
+                continue;
+            }
+            evaluated = true;
+            let ff = [
+                point_polygon(x, ei.normal, ej.corners()),
+                if ei.two_sided() {
+                    point_polygon(x, -ei.normal, ej.corners())
+                } else {
+                    0.0
+                },
+            ];
+            if ff[0] <= 0.0 && ff[1] <= 0.0 {
+                continue;
+            }
+            let kind = *pair.get_or_insert_with(|| {
+                let mut b = Aabb::EMPTY;
+                for c in ei.corners().iter().chain(ej.corners()) {
+                    b.include(*c);
+                }
+                visibility.pair(b.min, b.max, skip, &mut candidates)
+            });
+            let v = if kind == Pair::Clear {
+                1.0
+            } else {
+                cost.rays += rays as u64;
+                let seed = hash3(i as u32, j as u32, q as u32);
+                let ray = |y: Vec3| visibility.cast(x, y, skip, kind, &candidates);
+                visible_fraction(ray, ej, seed, rays)
+            };
+            for (r, f) in ff.iter().enumerate() {
+                acc[r][s] += w as f64 * *f as f64 * v;
+            }
+        }
+        cost.pairs += evaluated as u64;
+        cost.clear_pairs += (pair == Some(Pair::Clear)) as u64;
+        let slots = [j as u32, ej.back_slot];
+        for (s, &slot) in slots.iter().enumerate() {
+            if acc[0][s] > 0.0 {
+                out.front.push(Entry {
+                    slot,
+                    value: acc[0][s] as f32,
+                });
+            }
+            if acc[1][s] > 0.0 {
+                out.back.push(Entry {
+                    slot,
+                    value: acc[1][s] as f32,
+                });
+            }
+        }
+    }
+    (out, cost)
+}
+
+/// Fraction of `rays` segments from the receiving point to jittered points on `ej` that
+/// `ray` lets through. The points are stratified on a `g x ceil(rays / g)` grid of the
+/// emitter's parameter square (`g = ceil(sqrt(rays))`), jittered by `hash3(seed, k, ..)`.
+fn visible_fraction(ray: impl Fn(Vec3) -> f32, ej: &Element, seed: u32, rays: u32) -> f64 {
+    let g = (rays as f64).sqrt().ceil() as u32;
+    let rows = rays.div_ceil(g);
+    let mut sum = 0.0f64;
+    for k in 0..rays {
+        let (ju, jv) = unit2(hash3(seed, k, 0x0E1E_C7ED));
+        let u = ((k % g) as f32 + ju) / g as f32;
+        let v = ((k / g) as f32 + jv) / rows as f32;
+        sum += ray(point_on(ej.corners(), u.min(1.0), v.min(1.0))) as f64;
+    }
+    sum / rays as f64
+}
