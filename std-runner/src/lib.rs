@@ -7,5 +7,6 @@ pub mod files;
 pub mod obj;
 pub mod output;
 pub mod scene;
+pub mod solve;
 pub mod text;
 pub mod visibility;

@@ -116,12 +116,15 @@ pub(crate) fn load<S: SceneSource>(
     load_tree(view, &mut s, ws)?;
     finish_clusters(&mut s, ws);
     totals(&mut s, ws, info.suns + info.sky);
+    if s.power.is_nan() || s.power <= 0.0 {
+        return Err(HrError::NoLight);
+    }
     // The initial links: a self-link on the root, and every source to the root.
     let root = Elem::new(Kind::Cluster, 0);
     super::refine::add_link(&mut s, ws, root, root, 0)
         .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
     for k in 0..info.suns + info.sky {
-        super::refine::add_link(&mut s, ws, root, Elem::new(Kind::Source, k), 0)
+        super::refine::add_link(&mut s, ws, root, Elem::new(Kind::Source, k), PENDING)
             .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
     }
     Ok(s)

@@ -5,6 +5,7 @@ mod convert;
 mod flatten;
 mod info;
 mod progress;
+mod solve;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -33,6 +34,9 @@ pub enum Command {
     /// Expand every instance and write the scene as OBJ, faces in global-id order, materials
     /// in the .mtl beside it.
     Flatten(flatten::Args),
+    /// Compute the radiosity of every polygon (W/m^2): results table, image, statistics,
+    /// error against a reference.
+    Solve(solve::Args),
 }
 
 /// Parses the command line and runs the command.
@@ -42,6 +46,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Flatten(a) => flatten::run(a),
+        Command::Solve(a) => solve::run(a),
     }
 }
 

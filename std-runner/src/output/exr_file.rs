@@ -33,6 +33,8 @@ pub fn write_exr(frame: &Frame, out: impl Write + Seek) -> anyhow::Result<()> {
     );
     Image::from_layer(layer)
         .write()
+        // Chunks in a fixed order: the same image gives the same bytes on any machine.
+        .non_parallel()
         .to_buffered(out)
         .map_err(|e| anyhow!("cannot write the EXR image: {e}"))
 }

@@ -12,7 +12,8 @@ use std::path::Path;
 pub struct SolveReport {
     /// Solver: `hr` (hierarchical with instantiation) or `exact`.
     pub method: String,
-    /// Refinement threshold epsilon (W, transfer error per link).
+    /// Refinement threshold epsilon (dimensionless: a link is refined while its transfer
+    /// exceeds epsilon times the scene's emitted power).
     pub epsilon: f64,
     /// Worker threads.
     pub threads: u32,

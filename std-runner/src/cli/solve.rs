@@ -1,0 +1,277 @@
+//! `hirad solve SCENE`: radiosity of every polygon, with a results table, an image, stats and
+//! the error against a reference.
+
+use crate::exact::{self, ExactSettings};
+use crate::files;
+use crate::output::{self, ImageSink, Outputs, Progress, ReferenceSink, ResultsFile, SolveReport};
+use crate::solve::{self, VisibilityChoice};
+use anyhow::{Context, Result, anyhow, bail};
+use hirad_core::hr::Settings;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The solvers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Hierarchical radiosity with clustering over the expanded scene.
+    Hr,
+    /// Classic full-matrix radiosity on a uniformly subdivided mesh (the reference; scenes
+    /// of a few thousand elements).
+    Exact,
+}
+
+/// Arguments of `hirad solve`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file (.hir, .hirb or .obj).
+    pub scene: PathBuf,
+    /// Solver.
+    #[arg(long, value_enum, default_value_t = Method::Hr)]
+    pub method: Method,
+    /// Refinement threshold (hr): a link is refined while its transfer exceeds epsilon times
+    /// the scene's emitted power. Dimensionless; smaller is finer and slower.
+    #[arg(long, default_value_t = 1e-3)]
+    pub epsilon: f32,
+    /// Worker threads (results are identical for any count). Default: every core.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Workspace size for hr, e.g. 64M, 2G, 500000000 (bytes; K/M/G are powers of 1024).
+    /// Default: the planner's suggestion. A full workspace stops refinement and is reported.
+    #[arg(long, value_parser = parse_bytes)]
+    pub memory: Option<u64>,
+    /// Write one row per input polygon, in global-id order, to this CSV file.
+    #[arg(long)]
+    pub results: Option<PathBuf>,
+    /// Write the run's settings, counts, time, memory and error to this JSON file.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Render radiance (B/pi) from the camera: .exr (linear float) or .png (tone-mapped).
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// Camera "px,py,pz,tx,ty,tz,ux,uy,uz,fovy_deg" (position, target, up, vertical field of
+    /// view); default: the scene's first camera, else a view of the whole scene.
+    #[arg(long, allow_hyphen_values = true)]
+    pub camera: Option<String>,
+    /// Image size in pixels, WxH.
+    #[arg(long, default_value = "640x480")]
+    pub size: String,
+    /// Samples per pixel side (N x N per pixel).
+    #[arg(long, default_value_t = 1)]
+    pub supersample: u32,
+    /// Compare with this results table and print the L2 error (area-weighted, in percent of
+    /// the reference's largest radiosity).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Ray caster for hr.
+    #[arg(long, value_enum, default_value_t = VisibilityChoice::Obvhs)]
+    pub visibility: VisibilityChoice,
+    /// Visibility rays per receiver point and link.
+    #[arg(long, default_value_t = Settings::default().rays)]
+    pub rays: u32,
+    /// Smallest patch (hr), as a fraction of the scene's total polygon area.
+    #[arg(long, default_value_t = Settings::default().min_area)]
+    pub min_area: f32,
+    /// Convergence tolerance, relative to the largest radiosity.
+    #[arg(long, default_value_t = Settings::default().tolerance)]
+    pub tolerance: f32,
+    /// Element budget of the exact solver (its matrix grows as the square).
+    #[arg(long, default_value_t = ExactSettings::default().max_elements)]
+    pub elements: usize,
+    /// No progress bar, warnings or summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `123`, `64K`, `64M`, `2G`, `1.5GiB` -> bytes (K, M, G, T are powers of 1024).
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let value: f64 = num.parse().map_err(|_| {
+        format!("'{s}' is not a size: expected a number with an optional K, M, G or T")
+    })?;
+    let mult: f64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" | "kib" => 1024.0,
+        "m" | "mb" | "mib" => 1024.0 * 1024.0,
+        "g" | "gb" | "gib" => 1024.0 * 1024.0 * 1024.0,
+        "t" | "tb" | "tib" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        u => return Err(format!("'{s}': unknown unit '{u}' (use K, M, G or T)")),
+    };
+    let bytes = value * mult;
+    if !bytes.is_finite() || !(1.0..=9.0e18).contains(&bytes) {
+        return Err(format!("'{s}' is not a usable size"));
+    }
+    Ok(bytes as u64)
+}
+
+/// Runs `hirad solve`.
+pub fn run(a: Args) -> Result<()> {
+    let start = Instant::now();
+    if !(a.epsilon.is_finite() && a.epsilon > 0.0) {
+        bail!("--epsilon must be a positive number, got {}", a.epsilon);
+    }
+    if !(a.min_area.is_finite() && (0.0..1.0).contains(&a.min_area)) {
+        bail!("--min-area must lie in [0, 1), got {}", a.min_area);
+    }
+    if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
+        bail!("--tolerance must be a positive number, got {}", a.tolerance);
+    }
+    if a.rays == 0 || a.rays > 1024 {
+        bail!("--rays must lie in 1..=1024, got {}", a.rays);
+    }
+    let threads = match a.threads {
+        Some(0) => bail!("--threads must be at least 1"),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let loaded = files::load_scene(&a.scene)?;
+    super::warn_all(&loaded.warnings, a.quiet);
+    let scene = loaded.scene;
+    let bytes = files::compile(&a.scene, &scene)?;
+    let info = *crate::scene::read_image(&bytes)
+        .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?
+        .info();
+    drop(bytes);
+    let bands = scene.bands as usize;
+    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
+
+    // Outputs, checked before the (possibly long) solve.
+    let mut outputs = Outputs::default();
+    if let Some(path) = &a.reference {
+        let table = output::read_results_file(path)?;
+        if table.len() as u64 != info.expanded_polygons {
+            bail!(
+                "{}: the reference has {} polygons but {} has {}",
+                path.display(),
+                table.len(),
+                a.scene.display(),
+                info.expanded_polygons
+            );
+        }
+        outputs.reference = Some(
+            ReferenceSink::new(table, bands, two_sided)
+                .map_err(|e| anyhow!("{}: {e}", path.display()))?,
+        );
+    }
+    if let Some(path) = &a.image {
+        let size = output::parse_size(&a.size).map_err(|e| anyhow!("--size: {e}"))?;
+        let camera = match &a.camera {
+            Some(c) => output::parse_camera(c).map_err(|e| anyhow!("--camera: {e}"))?,
+            None => match scene.cameras.first() {
+                Some(c) => c.clone(),
+                None => output::default_camera(&output::scene_bounds(&scene), size)
+                    .map_err(|e| anyhow!("{e}"))?,
+            },
+        };
+        outputs.image = Some(ImageSink::new(
+            path,
+            &camera,
+            size,
+            a.supersample,
+            bands,
+            &scene.band_names,
+        )?);
+    }
+    if let Some(path) = &a.results {
+        outputs.results = Some(ResultsFile::create(path, bands, two_sided)?);
+    }
+
+    let progress = Progress::new(a.quiet);
+    let mut report = SolveReport {
+        method: match a.method {
+            Method::Hr => "hr".into(),
+            Method::Exact => "exact".into(),
+        },
+        epsilon: a.epsilon.to_string().parse().unwrap_or(a.epsilon as f64),
+        threads: threads as u32,
+        polygons: info.expanded_polygons,
+        elements: 0,
+        links: 0,
+        iterations: 0,
+        refinement_passes: 0,
+        seconds: 0.0,
+        peak_workspace_bytes: 0,
+        workspace_bytes: 0,
+        budget_limited: false,
+        error_percent: None,
+        error_per_band_percent: Vec::new(),
+        max_abs_difference: None,
+    };
+    match a.method {
+        Method::Hr => {
+            let settings = Settings {
+                epsilon: a.epsilon,
+                rays: a.rays,
+                min_area: a.min_area,
+                tolerance: a.tolerance,
+                ..Settings::default()
+            };
+            let run = solve::solve_hr(
+                &scene,
+                &settings,
+                threads,
+                a.memory,
+                a.visibility,
+                &progress,
+                &mut outputs,
+            )
+            .with_context(|| format!("{}", a.scene.display()))?;
+            let s = run.stats;
+            report.threads = run.threads as u32;
+            report.elements = s.clusters + s.patches;
+            report.links = s.links;
+            report.iterations = s.iterations;
+            report.refinement_passes = s.refinement_passes;
+            report.peak_workspace_bytes = s.peak_bytes;
+            report.workspace_bytes = s.workspace_bytes;
+            report.budget_limited = s.budget_limited;
+            if s.iteration_capped && !a.quiet {
+                eprintln!("warning: the solution stopped at the iteration cap before converging");
+            }
+        }
+        Method::Exact => {
+            let settings = ExactSettings {
+                max_elements: a.elements,
+                tolerance: a.tolerance as f64 * 1e-3,
+                ..ExactSettings::default()
+            };
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()?;
+            progress.phase("exact solve", None);
+            let r = pool
+                .install(|| exact::solve_exact_obvhs(&scene, &settings, &mut outputs))
+                .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?;
+            progress.finish();
+            report.elements = r.elements as u64;
+            report.links = r.form_factors;
+            report.iterations = r.iterations as u64;
+            report.workspace_bytes = r.matrix_bytes;
+            report.peak_workspace_bytes = r.matrix_bytes;
+        }
+    }
+    report.seconds = start.elapsed().as_secs_f64();
+    let comparison = outputs.finish()?;
+    if let Some(c) = &comparison {
+        report.set_comparison(c);
+        println!(
+            "error {:.4} % (L2, area-weighted, of the reference's largest radiosity {:.6} W/m^2) over {} polygons",
+            c.error_percent, c.reference_max, c.polygons
+        );
+    }
+    if let Some(path) = &a.stats {
+        report.write_json(path)?;
+    }
+    if !a.quiet {
+        report.print_summary(&mut std::io::stderr())?;
+        if report.budget_limited {
+            eprintln!(
+                "note: the workspace budget limited refinement; give more --memory for the full accuracy of this epsilon"
+            );
+        }
+    }
+    Ok(())
+}
