@@ -129,6 +129,7 @@ pub fn run(a: Args) -> Result<()> {
     };
     let loaded = files::load_scene(&a.scene)?;
     super::warn_all(&loaded.warnings, a.quiet);
+    let y_up = loaded.format == files::Format::Obj;
     let scene = loaded.scene;
     let bytes = files::compile(&a.scene, &scene)?;
     let info = *crate::scene::read_image(&bytes)
@@ -162,7 +163,8 @@ pub fn run(a: Args) -> Result<()> {
             Some(c) => output::parse_camera(c).map_err(|e| anyhow!("--camera: {e}"))?,
             None => match scene.cameras.first() {
                 Some(c) => c.clone(),
-                None => output::default_camera(&output::scene_bounds(&scene), size)
+                // OBJ files are y up by convention; hirad's own scenes default to z up.
+                None => output::default_camera_up(&output::scene_bounds(&scene), size, y_up)
                     .map_err(|e| anyhow!("{e}"))?,
             },
         };

@@ -137,6 +137,12 @@ pub fn check_camera(c: &Camera) -> Result<(), OptionError> {
 /// [`DEFAULT_VIEW_FROM`] (z up), with a [`DEFAULT_FOVY_DEG`] vertical field of view, far
 /// enough that the box's bounding sphere fits the narrower of the two fields of view.
 pub fn default_camera(bounds: &Aabb, size: Size) -> Result<Camera, OptionError> {
+    default_camera_up(bounds, size, false)
+}
+
+/// [`default_camera`] for a scene whose up axis is y (`y_up`, the OBJ convention) or z: the
+/// view comes from above and to the side either way.
+pub fn default_camera_up(bounds: &Aabb, size: Size, y_up: bool) -> Result<Camera, OptionError> {
     if !bounds.is_finite_nonempty() {
         return Err(OptionError(
             "the scene has no geometry for a default camera to look at".into(),
@@ -152,12 +158,21 @@ pub fn default_camera(bounds: &Aabb, size: Size) -> Result<Camera, OptionError> 
     let half_y = f64::from(DEFAULT_FOVY_DEG).to_radians() * 0.5;
     let half_x = (half_y.tan() * size.aspect()).atan();
     let distance = radius / half_y.min(half_x).sin() * 1.02;
-    let from = DEFAULT_VIEW_FROM.as_dvec3().normalize();
+    let from = if y_up {
+        glam::DVec3::new(
+            DEFAULT_VIEW_FROM.x as f64,
+            DEFAULT_VIEW_FROM.z as f64,
+            -DEFAULT_VIEW_FROM.y as f64,
+        )
+    } else {
+        DEFAULT_VIEW_FROM.as_dvec3()
+    }
+    .normalize();
     let camera = Camera {
         name: None,
         position: (centre + from * distance).as_vec3(),
         target: centre.as_vec3(),
-        up: Vec3::Z,
+        up: if y_up { Vec3::Y } else { Vec3::Z },
         fovy_deg: DEFAULT_FOVY_DEG,
     };
     check_camera(&camera).map_err(|e| OptionError(format!("default camera: {e}")))?;

@@ -19,8 +19,8 @@ pub mod results_read;
 pub mod stats;
 
 pub use camera::{
-    OptionError, Projection, Size, check_camera, default_camera, parse_camera, parse_size,
-    scene_bounds,
+    OptionError, Projection, Size, check_camera, default_camera, default_camera_up, parse_camera,
+    parse_size, scene_bounds,
 };
 pub use exr_file::{read_exr, write_exr};
 pub use frame::{Frame, channel_names};

@@ -1,0 +1,268 @@
+//! `hirad solve` end to end: the image shows the scene, results are identical for any thread
+//! count, the reference error is printed, stats are complete, bad options are refused.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn hirad(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hirad"))
+        .args(args)
+        .output()
+        .expect("run hirad")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = hirad(args);
+    assert!(
+        out.status.success(),
+        "hirad {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = hirad(args);
+    assert_eq!(out.status.code(), Some(1), "hirad {args:?} should fail");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures")
+        .join(name)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Mean of a channel over a block of pixels.
+fn mean(f: &hirad::output::Frame, ch: usize, x0: u32, y0: u32, w: u32, h: u32) -> f32 {
+    let mut sum = 0.0;
+    for y in y0..y0 + h {
+        for x in x0..x0 + w {
+            sum += f.pixel(x, y)[ch];
+        }
+    }
+    sum / (w * h) as f32
+}
+
+#[test]
+fn the_cornell_box_image_shows_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("box.exr");
+    ok(&[
+        "solve",
+        "-q",
+        s(&fixture("cornell_box.hir")),
+        "--image",
+        s(&exr),
+        "--size",
+        "128x128",
+    ]);
+    let f = hirad::output::read_exr(&exr).unwrap();
+    assert_eq!((f.width, f.height), (128, 128));
+    let (r, g, b) = (
+        f.channel("R").unwrap(),
+        f.channel("G").unwrap(),
+        f.channel("B").unwrap(),
+    );
+    // The classic camera looks into the open side: light at the top centre, red wall on the
+    // left, green wall on the right, white back wall in the middle.
+    let light = (0..128 * 20)
+        .map(|i| f.pixel(i % 128, i / 128)[r])
+        .fold(0.0f32, f32::max);
+    let left = [
+        mean(&f, r, 4, 50, 8, 20),
+        mean(&f, g, 4, 50, 8, 20),
+        mean(&f, b, 4, 50, 8, 20),
+    ];
+    let right = [
+        mean(&f, r, 116, 50, 8, 20),
+        mean(&f, g, 116, 50, 8, 20),
+        mean(&f, b, 116, 50, 8, 20),
+    ];
+    let back = mean(&f, r, 56, 30, 16, 10);
+    assert!(
+        left[0] > 2.0 * left[1] && left[0] > 2.0 * left[2],
+        "left wall is red: {left:?}"
+    );
+    assert!(
+        right[1] > 1.5 * right[0] && right[1] > 1.5 * right[2],
+        "right wall is green: {right:?}"
+    );
+    assert!(back > 0.0 && left[0] > 0.0 && right[1] > 0.0);
+    assert!(
+        light > 10.0 * back.max(left[0]).max(right[1]),
+        "the light ({light}) is far brighter than the walls"
+    );
+    assert!(
+        (light - 53.4 / std::f32::consts::PI).abs() < 1.0,
+        "light radiance is B/pi: {light}"
+    );
+}
+
+#[test]
+fn identical_bytes_with_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for scene in ["cornell_box.hir", "small_plant.hir", "chair_room.hir"] {
+        let mut files = Vec::new();
+        for t in ["1", "2"] {
+            let csv = d.join(format!("{scene}.{t}.csv"));
+            let exr = d.join(format!("{scene}.{t}.exr"));
+            ok(&[
+                "solve",
+                "-q",
+                s(&fixture(scene)),
+                "--threads",
+                t,
+                "--results",
+                s(&csv),
+                "--image",
+                s(&exr),
+                "--size",
+                "64x48",
+            ]);
+            files.push((std::fs::read(&csv).unwrap(), std::fs::read(&exr).unwrap()));
+        }
+        assert!(
+            files[0].0 == files[1].0,
+            "{scene}: results differ between 1 and 2 threads"
+        );
+        assert!(
+            files[0].1 == files[1].1,
+            "{scene}: images differ between 1 and 2 threads"
+        );
+    }
+}
+
+#[test]
+fn reference_error_and_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let exact = d.join("exact.csv");
+    ok(&[
+        "solve",
+        "-q",
+        s(&fixture("parallel_squares.hir")),
+        "--method",
+        "exact",
+        "--results",
+        s(&exact),
+    ]);
+    let table = std::fs::read_to_string(&exact).unwrap();
+    assert!(table.starts_with("id,area,rad_0,irr_0\n"), "{table}");
+    let stats = d.join("stats.json");
+    let out = ok(&[
+        "solve",
+        "-q",
+        s(&fixture("parallel_squares.hir")),
+        "--reference",
+        s(&exact),
+        "--stats",
+        s(&stats),
+    ]);
+    assert!(out.starts_with("error "), "{out}");
+    let pct: f64 = out.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(pct < 1.0, "{out}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    for key in [
+        "method",
+        "epsilon",
+        "threads",
+        "polygons",
+        "elements",
+        "links",
+        "iterations",
+        "seconds",
+        "peak_workspace_bytes",
+        "budget_limited",
+        "error_percent",
+    ] {
+        assert!(json.get(key).is_some(), "stats lack {key}: {json}");
+    }
+    assert_eq!(json["method"], "hr");
+    assert_eq!(json["polygons"], 2);
+    assert_eq!(json["epsilon"], 0.001);
+    assert!((json["error_percent"].as_f64().unwrap() - pct).abs() < 1e-3);
+}
+
+#[test]
+fn the_budget_shows_in_the_summary() {
+    let err = String::from_utf8(
+        hirad(&[
+            "solve",
+            s(&fixture("cornell_box.hir")),
+            "--epsilon",
+            "1e-5",
+            "--memory",
+            "300K",
+        ])
+        .stderr,
+    )
+    .unwrap();
+    assert!(
+        err.contains("budget limited") || err.contains("limited refinement"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_options_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let box_ = fixture("cornell_box.hir");
+    assert!(fails(&["solve", s(&box_), "--epsilon", "0"]).contains("--epsilon"));
+    assert!(fails(&["solve", s(&box_), "--epsilon", "nan"]).contains("--epsilon"));
+    assert!(fails(&["solve", s(&box_), "--threads", "0"]).contains("--threads"));
+    assert!(fails(&["solve", s(&box_), "--memory", "1K"]).contains("needs"));
+    let e = String::from_utf8(hirad(&["solve", s(&box_), "--memory", "lots"]).stderr).unwrap();
+    assert!(e.contains("not a size"), "{e}");
+    assert!(fails(&["solve", s(&box_), "--image", s(&d.join("x.bmp"))]).contains("x.bmp"));
+    assert!(
+        fails(&[
+            "solve",
+            s(&box_),
+            "--image",
+            s(&d.join("x.png")),
+            "--camera",
+            "1,2,3"
+        ])
+        .contains("--camera")
+    );
+    assert!(
+        fails(&[
+            "solve",
+            s(&box_),
+            "--image",
+            s(&d.join("x.png")),
+            "--size",
+            "0x10"
+        ])
+        .contains("--size")
+    );
+    assert!(
+        fails(&["solve", s(&box_), "--reference", s(&d.join("none.csv"))]).contains("none.csv")
+    );
+    // A reference of another scene.
+    let other = d.join("other.csv");
+    ok(&[
+        "solve",
+        "-q",
+        s(&fixture("parallel_squares.hir")),
+        "--results",
+        s(&other),
+    ]);
+    assert!(fails(&["solve", s(&box_), "--reference", s(&other)]).contains("polygons"));
+    // Nothing was left behind by the failed runs.
+    let left: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["other.csv"]);
+}
