@@ -3,14 +3,17 @@
 //! [`Visibility`] trait.
 //!
 //! The BVH only culls; whether a polygon blocks a segment is decided by an exact test in
-//! f64 on the original world-space corners, so the answer is a function of the geometry alone
-//! (not of the tree's shape, the build parameters or the thread count).
+//! f64 on the original world-space corners ([`Prepared::crosses`]), so the answer is a
+//! function of the geometry alone (not of the tree's shape, the build parameters or the
+//! thread count). The same test over the polygons that reach a box
+//! ([`ObvhsVisibility::candidates`], [`ObvhsVisibility::transmittance_among`]) gives the same
+//! answers for every segment inside that box without walking the tree.
 //!
 //! Scale-freedom: the segment is parameterised by `t` in [0, 1] from `from` to `to`, and only
 //! crossings with [`T_MARGIN`] < `t` < 1 - [`T_MARGIN`] count, a margin relative to the
 //! segment's own length. The BVH is built in a normalised frame (scene centred, scaled by a
-//! power of two to a unit half-extent) and its boxes are padded by [`BOX_PAD`] of that unit,
-//! which makes the f32 box tests conservative at any scene scale.
+//! power of two to a unit half-extent) and its boxes are padded by 1e-5 of that unit, which
+//! makes the f32 box tests conservative at any scene scale.
 
 use glam::{DVec3, UVec2, Vec3, Vec3A};
 use hirad_core::visibility::Visibility;

@@ -2,7 +2,7 @@
 //! row independent and in a fixed order, so that the matrix is bit-identical for any thread
 //! count.
 //!
-//! `F[(i, r), (j, s)] = sum_q w_q * point_polygon(x_q, n_r, j) * V(x_q, j)` over the
+//! `F[(i, r), (j, s)] = sum_q w_q * point_polygon_f64(x_q, n_r, j) * V(x_q, j)` over the
 //! quadrature points `x_q` of element `i` whose view of `j` shows side `s` of `j`, where `r`
 //! is the receiving side of `i` (its front normal, or the opposite one for the back of a
 //! two-sided element) and `V` is the fraction of jittered rays from `x_q` to `j` that pass.
@@ -13,7 +13,7 @@ use super::mesh::{Element, Mesh};
 use super::quadrature::Quadrature;
 use super::rays::{Pair, PairRays};
 use glam::Vec3;
-use hirad_core::formfactor::{facing_side, point_polygon};
+use hirad_core::formfactor::{facing_side, point_polygon_f64};
 use hirad_core::geometry::Aabb;
 use hirad_core::sampling::{hash3, point_on, unit2};
 use rayon::prelude::*;
@@ -126,10 +126,12 @@ fn row<R: PairRays + ?Sized>(
                 continue;
             }
             evaluated = true;
+            // The f64 form factor: sums over a closed surround close to 1 within 1e-9.
+            let (xd, nd) = (x.as_dvec3(), ei.normal.as_dvec3());
             let ff = [
-                point_polygon(x, ei.normal, ej.corners()),
+                point_polygon_f64(xd, nd, ej.corners()),
                 if ei.two_sided() {
-                    point_polygon(x, -ei.normal, ej.corners())
+                    point_polygon_f64(xd, -nd, ej.corners())
                 } else {
                     0.0
                 },
@@ -153,7 +155,7 @@ fn row<R: PairRays + ?Sized>(
                 visible_fraction(ray, ej, seed, rays)
             };
             for (r, f) in ff.iter().enumerate() {
-                acc[r][s] += w as f64 * *f as f64 * v;
+                acc[r][s] += w as f64 * f * v;
             }
         }
         cost.pairs += evaluated as u64;

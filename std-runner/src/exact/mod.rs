@@ -6,7 +6,7 @@
 //!   levels chosen so that elements have about equal areas and the total stays within
 //!   [`ExactSettings::max_elements`];
 //! * form factors are exact point-to-polygon form factors
-//!   ([`hirad_core::formfactor::point_polygon`]) integrated by quadrature over the receiver,
+//!   ([`hirad_core::formfactor::point_polygon_f64`]) integrated by quadrature over the receiver,
 //!   times the fraction of deterministic jittered rays that reach the emitter, for both
 //!   sides of two-sided (translucent) materials;
 //! * suns and sky directions light every element directly, with shadow rays;
