@@ -368,3 +368,22 @@ fn refuses_bad_settings_huge_scenes_and_reports_no_convergence() {
     let e = solve_exact_obvhs(&broken, &ExactSettings::default(), &mut keep).unwrap_err();
     assert!(matches!(e, ExactError::Scene(_)), "{e}");
 }
+
+#[test]
+fn pair_culling_gives_the_same_matrix_as_casting_every_ray() {
+    // The Cornell box (blocks and a light that cast shadows), three bands.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/cornell_box.hir");
+    let scene = crate::files::load_scene(&path).unwrap().scene;
+    let settings = small(200);
+    let (culled, rc) = solve(&scene, &settings);
+    assert!(rc.clear_pairs > 0);
+    let m = Mesh::build::<Infallible>(&scene, &settings).unwrap();
+    let polygons: Vec<&[Vec3]> = m.polygons.iter().map(|p| p.corners()).collect();
+    let vis = ObvhsVisibility::new(&polygons).unwrap();
+    let mut keep = Keep::default();
+    let rp = solve_exact(&scene, &settings, &vis, &mut keep).unwrap();
+    assert_eq!(keep.polygons, culled);
+    assert_eq!(rp.clear_pairs, 0);
+    assert!(rp.rays > rc.rays);
+    assert_eq!((rp.entries, rp.iterations), (rc.entries, rc.iterations));
+}
