@@ -2,8 +2,8 @@
 //! split as fallback, an explicit fixed-size stack, no allocation, deterministic output.
 //!
 //! # Algorithm
-//! Each node's primitives are binned by box centre into [`BINS`] bins on every axis along
-//! which the centres spread; the split between bins with the lowest surface-area cost wins
+//! Each node's primitives are binned by box centre into [`BINS`] bins (fewer for nodes of
+//! fewer primitives) on every axis along which the centres spread; the split between bins with the lowest surface-area cost wins
 //! (costs in f64, relative to one polygon test, so that no finite f32 box overflows them).
 //! Nodes of more than [`MAX_LEAF`] primitives are always split; smaller ones only when the
 //! split is cheaper than testing every primitive. When the centres do not spread (all equal,
@@ -29,7 +29,8 @@ use super::{
 use crate::geometry::Aabb;
 use glam::Vec3;
 
-/// Bins per axis of the SAH sweep.
+/// Bins per axis of the SAH sweep (nodes of fewer primitives use one bin per primitive,
+/// at least 4).
 pub const BINS: usize = 16;
 
 /// Cost of visiting a node relative to one polygon test, in the SAH.
@@ -226,9 +227,14 @@ fn split(
     if task.level <= SAH_LEVELS {
         match sah(bounds, prims, node_box, task) {
             Sah::Leaf => return None,
-            Sah::Split { axis, bin, scale } => {
+            Sah::Split {
+                axis,
+                bin,
+                bins,
+                scale,
+            } => {
                 let lo = task.cmin[axis];
-                let s = partition(bounds, prims, |c| bin_of(c[axis], lo, scale) <= bin);
+                let s = partition(bounds, prims, |c| bin_of(c[axis], lo, scale, bins) <= bin);
                 if s.mid > 0 && s.mid < n {
                     return Some(s);
                 }
@@ -246,29 +252,35 @@ fn split(
 enum Sah {
     /// Testing every primitive is cheaper than any split.
     Leaf,
-    /// Primitives whose centre falls in bins `0..=bin` of `axis` go left.
-    Split { axis: usize, bin: usize, scale: f32 },
+    /// Primitives whose centre falls in bins `0..=bin` (of `bins`) of `axis` go left.
+    Split {
+        axis: usize,
+        bin: usize,
+        bins: usize,
+        scale: f32,
+    },
     /// The centres do not spread along any axis by enough to bin them.
     NoSpread,
 }
 
-/// Bin of a centre coordinate `c` for bins starting at `lo`, `scale = BINS / extent`.
+/// Bin of a centre coordinate `c` for `bins` bins starting at `lo`, `scale = bins / extent`.
 /// Saturating conversion: NaN and negative values land in bin 0, so this never panics.
 #[inline]
-fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
-    (((c - lo) * scale) as usize).min(BINS - 1)
+fn bin_of(c: f32, lo: f32, scale: f32, bins: usize) -> usize {
+    (((c - lo) * scale) as usize).min(bins - 1)
 }
 
 /// The binned SAH decision for one node.
 fn sah(bounds: &mut impl FnMut(u32) -> Aabb, prims: &[u32], node_box: &Aabb, task: &Task) -> Sah {
-    // An axis can be binned when its centre extent and BINS / extent are positive and finite.
+    // An axis can be binned when its centre extent and bins / extent are positive and finite.
     // Then the lowest centre falls in bin 0 and the highest in the last bin (the extent maps
-    // to at least BINS - 1 after rounding), so every split plane has primitives on both sides.
+    // to at least bins - 1 after rounding), so every split plane has primitives on both sides.
+    let bins = prims.len().clamp(4, BINS);
     let mut scale = [0.0f32; 3];
     let mut any = false;
     for (axis, s) in scale.iter_mut().enumerate() {
         let extent = task.cmax[axis] - task.cmin[axis];
-        let k = BINS as f32 / extent;
+        let k = bins as f32 / extent;
         if extent > 0.0 && extent.is_finite() && k.is_finite() && k > 0.0 {
             *s = k;
             any = true;
@@ -284,7 +296,7 @@ fn sah(bounds: &mut impl FnMut(u32) -> Aabb, prims: &[u32], node_box: &Aabb, tas
         let c = centre(b);
         for axis in 0..3 {
             if scale[axis] > 0.0 {
-                let k = bin_of(c[axis], task.cmin[axis], scale[axis]);
+                let k = bin_of(c[axis], task.cmin[axis], scale[axis], bins);
                 let bin = &mut boxes[axis][k];
                 bin.min = bin.min.min(b.min);
                 bin.max = bin.max.max(b.max);
@@ -300,11 +312,13 @@ fn sah(bounds: &mut impl FnMut(u32) -> Aabb, prims: &[u32], node_box: &Aabb, tas
             continue;
         }
         let (bx, cn) = (&boxes[axis], &counts[axis]);
+        // Plain min/max unions: the empty box is their identity, and a box is only measured
+        // once it holds a primitive.
         let mut right_cost = [0.0f64; BINS];
         let mut acc = Aabb::EMPTY;
         let mut m = 0u32;
-        for k in (1..BINS).rev() {
-            acc = acc.union(bx[k]);
+        for k in (1..bins).rev() {
+            acc = Aabb::new(acc.min.min(bx[k].min), acc.max.max(bx[k].max));
             m += cn[k];
             right_cost[k - 1] = if m == 0 {
                 f64::INFINITY
@@ -314,8 +328,8 @@ fn sah(bounds: &mut impl FnMut(u32) -> Aabb, prims: &[u32], node_box: &Aabb, tas
         }
         let mut acc = Aabb::EMPTY;
         let mut m = 0u32;
-        for k in 0..BINS - 1 {
-            acc = acc.union(bx[k]);
+        for k in 0..bins - 1 {
+            acc = Aabb::new(acc.min.min(bx[k].min), acc.max.max(bx[k].max));
             m += cn[k];
             if m == 0 {
                 continue;
@@ -339,6 +353,7 @@ fn sah(bounds: &mut impl FnMut(u32) -> Aabb, prims: &[u32], node_box: &Aabb, tas
     Sah::Split {
         axis,
         bin,
+        bins,
         scale: scale[axis],
     }
 }

@@ -10,8 +10,9 @@
 //!   covers the rounding of `(bound - origin) / direction` (Ize 2013, "Robust BVH ray
 //!   traversal", uses `1 + 2 * gamma(3)`). Relative to t, so it is scale-free.
 //! * A zero direction component gives an infinite inverse; a segment lying exactly in a slab's
-//!   boundary plane then gives `0 * inf = NaN`, which `f32::max`/`f32::min` ignore, so the
-//!   segment counts as inside that slab (the box is closed) rather than being lost.
+//!   boundary plane then gives `0 * inf = NaN`, which the bound updates ignore (a comparison
+//!   with NaN is false), so the segment counts as inside that slab (the box is closed) rather
+//!   than being lost.
 //! * Near and far bounds are chosen from the sign of the direction (including the sign of
 //!   zero), not by comparing the two distances, so NaN never picks the wrong side.
 
@@ -26,7 +27,10 @@ const FAR_PAD: f32 = 1.0 + 4.0 * f32::EPSILON;
 pub(crate) struct SlabSegment {
     origin: [f32; 3],
     inv: [f32; 3],
-    negative: [bool; 3],
+    /// Per axis, where the near and far bound sit in a node seen as 8 words
+    /// (`min` at 0..3, `max` at 4..7): chosen once from the direction's sign.
+    near: [usize; 3],
+    far: [usize; 3],
 }
 
 impl SlabSegment {
@@ -38,33 +42,40 @@ impl SlabSegment {
             return None;
         }
         let d = d.to_array();
+        let mut near = [0, 1, 2];
+        let mut far = [4, 5, 6];
+        for axis in 0..3 {
+            // The sign bit, so that -0.0 (inverse -inf) takes the bounds of a negative step.
+            if d[axis].is_sign_negative() {
+                core::mem::swap(&mut near[axis], &mut far[axis]);
+            }
+        }
         Some(SlabSegment {
             origin: from.to_array(),
             inv: [1.0 / d[0], 1.0 / d[1], 1.0 / d[2]],
-            negative: [
-                d[0].is_sign_negative(),
-                d[1].is_sign_negative(),
-                d[2].is_sign_negative(),
-            ],
+            near,
+            far,
         })
     }
 
     /// The parameter where the segment enters the node's box, if it meets the box for some t
     /// in [0, t_max].
-    #[inline]
+    #[inline(always)]
     pub(crate) fn enter(&self, node: &BvhNode, t_max: f32) -> Option<f32> {
+        let w: &[f32; 8] = bytemuck::cast_ref(node);
         let mut near = 0.0f32;
         let mut far = t_max;
         for axis in 0..3 {
-            let (lo, hi) = if self.negative[axis] {
-                (node.max[axis], node.min[axis])
-            } else {
-                (node.min[axis], node.max[axis])
-            };
-            let t0 = (lo - self.origin[axis]) * self.inv[axis];
-            let t1 = (hi - self.origin[axis]) * self.inv[axis] * FAR_PAD;
-            near = near.max(t0);
-            far = far.min(t1);
+            let t0 = (w[self.near[axis]] - self.origin[axis]) * self.inv[axis];
+            let t1 = (w[self.far[axis]] - self.origin[axis]) * self.inv[axis] * FAR_PAD;
+            // Written as comparisons so that a NaN distance leaves the bound unchanged (and
+            // compiles to one max/min instruction).
+            if t0 > near {
+                near = t0;
+            }
+            if t1 < far {
+                far = t1;
+            }
         }
         if near <= far { Some(near) } else { None }
     }
