@@ -1,11 +1,12 @@
 //! The core's own BVH: build time and occlusion queries per second over random triangle soups
 //! of 10k and 1M triangles in the unit cube. `cargo bench --bench bvh`.
 //!
-//! Triangles have edges of about `0.5 n^(-1/3)`, so the soup looks alike at both sizes (about
-//! as many triangles along a segment). Queries: 4096 segments between random points of the
-//! cube ("long", mostly blocked, stops at the first hit) and 4096 segments of 1/20 of the cube
-//! ("short", mostly free: the whole path is searched). Storage is allocated once outside the
-//! timed region, as a caller of the no-alloc core would.
+//! Triangles have edges of about `0.5 n^(-1/3)`, so the soup looks alike at both sizes.
+//! Queries: 4096 segments between random points of the cube ("long": 25% blocked at 10k
+//! triangles, 69% at 1M; a blocked query stops at the first hit) and 4096 segments spanning at
+//! most 0.05 per axis ("short": 2% and 9% blocked, mostly a full search of the path). Trees are
+//! 17 and 24 levels deep. Storage is allocated once outside the timed region, as a caller of
+//! the no-alloc core would.
 
 use divan::{Bencher, counter::ItemsCount};
 use glam::Vec3;
@@ -103,16 +104,6 @@ fn queries(bencher: Bencher, n: u32, short: bool) {
     )
     .unwrap();
     let segs = segments(short);
-    let blocked = segs
-        .iter()
-        .filter(|(a, b)| vis.transmittance(*a, *b, [NONE; 2]) == 0.0)
-        .count();
-    eprintln!(
-        "{n} triangles, {} segments: {:.0}% blocked, tree depth {}",
-        if short { "short" } else { "long" },
-        100.0 * blocked as f64 / segs.len() as f64,
-        vis.bvh().depth()
-    );
     bencher
         .counter(ItemsCount::new(segs.len()))
         .bench_local(|| {
