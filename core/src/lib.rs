@@ -5,6 +5,10 @@
 //! * [`geometry`]: polygon shape checks, similarity transforms and boxes, shared by every
 //!   loader so that a scene accepted anywhere is accepted everywhere.
 //! * [`material`]: per-band material data and its physical checks.
+//! * [`formfactor`], [`sampling`]: exact point-to-polygon form factors, deterministic sampling.
+//! * [`bvh`]: a bounding-volume hierarchy built in caller storage, and visibility through it.
+//! * [`hr`]: hierarchical radiosity with clustering in one caller-provided workspace.
+//! * [`sink`], [`visibility`]: where results go and where rays come from.
 //!
 //! Units: lengths in metres (any unit works as long as it is consistent: nothing in the core
 //! uses an absolute tolerance), exitance, irradiance and radiosity in W/m^2.

@@ -415,7 +415,12 @@ where
                 nodes,
                 order,
             )
-            .map_err(|_| HrError::SceneTooLarge)?;
+            .map_err(|e| match e {
+                crate::bvh::BvhError::InvalidBounds { primitive } => HrError::BadGeometry {
+                    polygon: primitive as u64,
+                },
+                _ => HrError::SceneTooLarge,
+            })?;
             vis::Vis::Internal(bvh)
         }
     };
