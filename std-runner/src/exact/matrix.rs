@@ -23,7 +23,9 @@ use rayon::prelude::*;
 pub struct Entry {
     /// Radiosity slot of the emitting side.
     pub slot: u32,
-    /// Form factor from the receiving side to that emitting side.
+    /// Form factor from the receiving side to that emitting side, accumulated in f64 and
+    /// stored in f32 (about 1e-7 relative: a closed rho = 0.99 furnace then lands within
+    /// 1e-6 of `E / (1 - rho)`).
     pub value: f32,
 }
 

@@ -87,7 +87,7 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Expands and subdivides `scene` (which must pass `Scene::check`) within the element
+    /// Checks `scene` (`Scene::check`), expands it and subdivides it within the element
     /// budget of `settings`.
     pub fn build<E>(scene: &Scene, settings: &ExactSettings) -> Result<Mesh, ExactError<E>> {
         let mut polygons = expand_polygons(scene)?;
