@@ -237,7 +237,7 @@ pub fn run(a: Args) -> Result<()> {
         Method::Exact => {
             let settings = ExactSettings {
                 max_elements: a.elements,
-                tolerance: a.tolerance as f64 * 1e-3,
+                tolerance: (a.tolerance as f64 * 1e-3).max(1e-12),
                 ..ExactSettings::default()
             };
             let pool = rayon::ThreadPoolBuilder::new()
