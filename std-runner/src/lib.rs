@@ -4,6 +4,7 @@
 pub mod cli;
 pub mod exact;
 pub mod files;
+pub mod generate;
 pub mod obj;
 pub mod output;
 pub mod scene;

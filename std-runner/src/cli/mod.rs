@@ -37,6 +37,8 @@ pub enum Command {
     /// Compute the radiosity of every polygon (W/m^2): results table, image, statistics,
     /// error against a reference.
     Solve(solve::Args),
+    /// Generate a procedural scene: poplar, stand, room, forest, canopy.
+    Gen(crate::generate::Args),
 }
 
 /// Parses the command line and runs the command.
@@ -47,6 +49,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Convert(a) => convert::run(a),
         Command::Flatten(a) => flatten::run(a),
         Command::Solve(a) => solve::run(a),
+        Command::Gen(a) => crate::generate::run(a),
     }
 }
 
