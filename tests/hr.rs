@@ -297,3 +297,57 @@ fn a_scene_without_light_is_refused() {
     let e = solve_with(&scene, &Settings::default(), Run::Core, None).unwrap_err();
     assert_eq!(e, SolveError::Hr(HrError::NoLight));
 }
+
+#[test]
+fn settings_out_of_range_are_refused() {
+    let scene = load("parallel_squares.hir");
+    for bad in [
+        Settings {
+            epsilon: 0.0,
+            ..Settings::default()
+        },
+        Settings {
+            epsilon: f32::NAN,
+            ..Settings::default()
+        },
+        Settings {
+            rays: 0,
+            ..Settings::default()
+        },
+        Settings {
+            max_children: 1,
+            ..Settings::default()
+        },
+        Settings {
+            max_children: 17,
+            ..Settings::default()
+        },
+        Settings {
+            min_area: 1.0,
+            ..Settings::default()
+        },
+        Settings {
+            tolerance: -1.0,
+            ..Settings::default()
+        },
+    ] {
+        let bytes = hirad::scene::compile(&scene).unwrap();
+        let view = read_image(&bytes).unwrap();
+        let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
+        assert!(matches!(
+            hr::plan(&view, &bad, true, &mut scratch),
+            Err(HrError::Settings(_))
+        ));
+        let mut ws = vec![0u8; 1 << 20];
+        let e = hr::solve(
+            &view,
+            &bad,
+            &mut ws,
+            None::<&ObvhsVisibility>,
+            &mut Sequential,
+            &mut NoProgress,
+            &mut ResultsTable::new(1, false),
+        );
+        assert!(matches!(e, Err(SolveError::Hr(HrError::Settings(_)))));
+    }
+}

@@ -63,6 +63,31 @@ pub struct Settings {
     pub max_children: u32,
 }
 
+impl Settings {
+    /// Checks every setting's range.
+    pub fn check(&self) -> Result<(), HrError> {
+        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
+            return Err(HrError::Settings("epsilon must be a positive number"));
+        }
+        if !(self.min_area.is_finite() && (0.0..1.0).contains(&self.min_area)) {
+            return Err(HrError::Settings("min_area must lie in [0, 1)"));
+        }
+        if self.max_depth > 24 {
+            return Err(HrError::Settings("max_depth must be at most 24"));
+        }
+        if self.rays == 0 || self.rays > 1024 {
+            return Err(HrError::Settings("rays must lie in 1..=1024"));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(HrError::Settings("tolerance must be a positive number"));
+        }
+        if !(2..=16).contains(&self.max_children) {
+            return Err(HrError::Settings("max_children must lie in 2..=16"));
+        }
+        Ok(())
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -131,6 +156,8 @@ pub enum HrError {
     NoLight,
     /// The scene has no polygons.
     Empty,
+    /// A setting is out of range (the message names it).
+    Settings(&'static str),
     /// A polygon is unusable once placed (its instance transforms overflow f32).
     BadGeometry {
         /// Global id of the polygon.
@@ -162,6 +189,7 @@ impl core::fmt::Display for HrError {
                 f.write_str("nothing emits light: give a material 'emit', or add a sun or sky")
             }
             HrError::Empty => f.write_str("the scene has no polygons"),
+            HrError::Settings(what) => write!(f, "invalid setting: {what}"),
             HrError::BadGeometry { polygon } => {
                 write!(
                     f,
@@ -226,6 +254,7 @@ pub fn plan<S: SceneSource>(
     internal_bvh: bool,
     scratch: &mut [u8],
 ) -> Result<Plan, HrError> {
+    settings.check()?;
     let c = census(view, settings.max_children, scratch)?;
     plan_from(view, settings, internal_bvh, &c)
 }
@@ -354,6 +383,7 @@ where
     E: Executor,
     P: Progress,
 {
+    settings.check()?;
     let total = workspace.len();
     let ws = aligned(workspace);
     // Count the scene with the workspace itself as scratch, then lay it out.
