@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every fuzz target for SECONDS seconds (default 60), seeded from fixtures/.
-# Usage: fuzz/run.sh [SECONDS [TARGET...]] (targets: binary_view text_parse obj_import; all by
+# Usage: fuzz/run.sh [SECONDS [TARGET...]] (targets: binary_view text_parse obj_import
+# results_read; all by
 # default). Needs cargo-fuzz (`cargo install cargo-fuzz --locked`).
 # Prints each target's execution count; exits non-zero on the first finding (the crashing
 # input is left in fuzz/artifacts/TARGET/).
@@ -8,7 +9,7 @@ set -euo pipefail
 SECONDS_PER_TARGET="${1:-60}"
 shift || true
 TARGETS=("$@")
-[ "${#TARGETS[@]}" -gt 0 ] || TARGETS=(binary_view text_parse obj_import)
+[ "${#TARGETS[@]}" -gt 0 ] || TARGETS=(binary_view text_parse obj_import results_read)
 cd "$(dirname "$0")"
 ROOT="$(cd .. && pwd)"
 
@@ -27,6 +28,11 @@ seed() {
         mtl="$(grep -m1 '^mtllib' "$f" | awk '{print $2}' | tr -d '\r' || true)"
         { cat "$f"; if [ -n "$mtl" ] && [ -e "$(dirname "$f")/$mtl" ]; then printf '\xff'; cat "$(dirname "$f")/$mtl"; fi; } \
           > "corpus/$target/$(basename "$base").seed"
+      done ;;
+    results_read)
+      (cd "$ROOT" && cargo build --release -q -p hirad)
+      for f in "$ROOT"/fixtures/*.hir; do
+        "$ROOT/target/release/hirad" solve -q "$f" --epsilon 1e-2 --results "corpus/$target/$(basename "${f%.hir}").csv" || true
       done ;;
     binary_view)
       (cd "$ROOT" && cargo build --release -q -p hirad)
