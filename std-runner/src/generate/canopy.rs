@@ -8,9 +8,11 @@
 //! soil in the open can be compared with soil under the canopy. Leaves reflect 0.08 (PAR)
 //! and 0.45 (NIR) and transmit 0.05 and 0.45; the soil reflects 0.1 and 0.25.
 //!
-//! Defaults and polygons after expansion (seed 1): maize, 24 rows x 100 plants (0.75 m by
-//! 0.2 m, a 17 x 20 m field of 2,400 plants): 509,586 polygons; wheat, 30 rows x 100 plants
-//! (0.17 m by 0.05 m, 3,000 plants): 545,133 polygons.
+//! Defaults and polygons after expansion (seed 1): maize, 24 rows x 100 plants, 0.75 m by
+//! 0.2 m (a 17 x 20 m field of 2,400 plants; variants of 210 to 218 polygons; 3,648 soil
+//! tiles): 519,032 polygons. Wheat, 30 rows x 80 plants, 0.17 m by 0.05 m (a 4 x 5 m field
+//! of 2,400 plants of 3 or 4 tillers, 198 to 264 polygons; 2,592 soil tiles): 571,710
+//! polygons. The compact scenes hold under 5,000 polygons (about 0.6 MB as .hirb).
 //!
 //! Units: metres, W/m^2 (sun: 400 PAR and 420 NIR on a plane facing it; sky: 80 PAR and 60
 //! NIR on the horizontal).
@@ -162,6 +164,27 @@ fn soil(field: &Field, margin: f32, material: u32) -> Cluster {
     soil
 }
 
+impl Args {
+    /// Reads the options of `hirad gen canopy` from command-line words (without the command
+    /// itself), with the same defaults as the command line, e.g. `["-o", "x.hirb"]`.
+    pub fn from_words<I, T>(words: I) -> Result<Args>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        #[command(name = "canopy")]
+        struct Words {
+            #[command(flatten)]
+            args: Args,
+        }
+        let words = std::iter::once(std::ffi::OsString::from("canopy"))
+            .chain(words.into_iter().map(Into::into));
+        Ok(Words::try_parse_from(words)?.args)
+    }
+}
+
 /// Builds the scene.
 pub fn generate(a: &Args) -> Result<Scene> {
     let field = Field::of(a)?;
@@ -171,7 +194,8 @@ pub fn generate(a: &Args) -> Result<Scene> {
     if !(a.margin.is_finite() && (0.0..=1000.0).contains(&a.margin)) {
         bail!("--margin must lie between 0 and 1000 m");
     }
-    if !(a.sun_elevation > 0.0 && a.sun_elevation <= 90.0) || !a.sun_azimuth.is_finite() {
+    let sun_ok = a.sun_elevation > 0.0 && a.sun_elevation <= 90.0 && a.sun_azimuth.is_finite();
+    if !sun_ok {
         bail!("--sun-elevation must lie in (0, 90] degrees and --sun-azimuth be a number");
     }
     if !(1..=32).contains(&a.sky_rings) {
@@ -276,4 +300,46 @@ pub fn generate(a: &Args) -> Result<Scene> {
         },
     ];
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn soil_tiles_centre_on_rows_and_between_them() {
+        let cuts = tile_cuts(-1.0, 3.0, 0.375, 0.0);
+        assert!(cuts[0] <= -1.0 && *cuts.last().unwrap() >= 3.0);
+        for w in cuts.windows(2) {
+            let centre = 0.5 * (w[0] + w[1]);
+            assert!(((centre / 0.375) - (centre / 0.375).round()).abs() < 1e-4);
+        }
+        let field = Field {
+            rows: 3,
+            per_row: 4,
+            row_spacing: 0.75,
+            plant_spacing: 0.2,
+        };
+        let s = soil(&field, 1.0, 0);
+        let tiles: usize = s.children.iter().map(|c| c.polygons.len()).sum();
+        // Tiles of 0.375 m centred on multiples of 0.375 m, covering at least -1..2.5 m
+        // across (-1.3125..2.8125: 11 strips) and -1..1.6 m along (-1.3125..1.6875: 8).
+        assert_eq!(s.children.len(), 11);
+        assert_eq!(tiles, 11 * 8);
+    }
+
+    #[test]
+    fn bad_options_are_refused() {
+        for words in [
+            &["--rows", "0"][..],
+            &["--row-spacing", "0"],
+            &["--variants", "0"],
+            &["--sun-elevation=-5"],
+            &["--sky-rings", "0"],
+            &["--margin", "nan"],
+        ] {
+            let a = Args::from_words(["-o", "x.hirb"].iter().chain(words)).unwrap();
+            assert!(generate(&a).is_err(), "{words:?}");
+        }
+    }
 }

@@ -62,7 +62,7 @@ fn back_y(x: f32, z: f32, lumbar: f32) -> f32 {
 }
 
 /// The dining chair: seat (cushion and frame), legs, stretchers, and back (posts, rails,
-/// slats); about 1,400 polygons.
+/// slats); about 1,500 polygons.
 pub fn chair(m: FurnitureMaterials) -> Cluster {
     let mut seat = Cluster::named("seat");
     let mut cushion = Cluster::named("cushion");
@@ -184,7 +184,7 @@ pub fn chair(m: FurnitureMaterials) -> Cluster {
 }
 
 /// The dining table: a top with rounded edges, an apron, and four turned legs with square
-/// blocks under the apron; about 1,400 polygons.
+/// blocks under the apron; about 1,300 polygons.
 pub fn table(m: FurnitureMaterials) -> Cluster {
     let thickness = 0.035;
     let mut top = Cluster::named("top");

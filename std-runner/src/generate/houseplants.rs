@@ -162,7 +162,7 @@ fn flower(
 }
 
 /// A Phalaenopsis orchid in a glazed pot, about 60 cm tall; `rng` varies leaves, spikes and
-/// flowers. About 1,300 polygons.
+/// flowers. About 1,200 polygons.
 pub fn orchid(m: &PlantMaterials, rng: &mut Rng) -> Cluster {
     let soil_z = 0.11;
     let pot = pot(

@@ -1,0 +1,345 @@
+//! `hirad gen room` and `hirad gen canopy` end to end: deterministic and valid scenes, the
+//! counts asked for, exact instances that do not overlap, walls that face in, two-sided
+//! leaves, and a hierarchical solve that lights the room's floor and shades the soil under
+//! a canopy.
+
+use anyhow::Result;
+use glam::Vec3;
+use hirad::generate::canopy;
+use hirad::generate::room::{self, mesh};
+use hirad::output::Progress;
+use hirad::scene::{Cluster, Scene, compile, read_image};
+use hirad::solve::{VisibilityChoice, solve_hr};
+use hirad_core::geometry::{Aabb, Similarity, polygon_shape};
+use hirad_core::hr::Settings;
+use hirad_core::sink::{PolygonResult, Sink};
+use std::path::Path;
+
+/// Output path argument (generation never writes it).
+const OUT: [&str; 2] = ["-o", "unused.hirb"];
+
+fn room_scene(extra: &[&str]) -> Scene {
+    let words: Vec<&str> = OUT.iter().chain(extra).copied().collect();
+    room::generate(&room::Args::from_words(words).unwrap()).unwrap()
+}
+
+fn canopy_scene(extra: &[&str]) -> Scene {
+    let words: Vec<&str> = OUT.iter().chain(extra).copied().collect();
+    canopy::generate(&canopy::Args::from_words(words).unwrap()).unwrap()
+}
+
+/// The .hirb bytes `hirad gen` writes for `scene`.
+fn hirb(scene: &Scene, dir: &Path, name: &str) -> Vec<u8> {
+    let path = dir.join(name);
+    hirad::generate::write(scene, &path).unwrap();
+    std::fs::read(path).unwrap()
+}
+
+/// Every instance node of a tree, with its transform to the tree's root frame.
+fn instances<'a>(c: &'a Cluster, to_root: Similarity, out: &mut Vec<(&'a Cluster, Similarity)>) {
+    let here = match &c.instance {
+        Some(i) => to_root.compose(&i.transform),
+        None => to_root,
+    };
+    if c.instance.is_some() {
+        out.push((c, here));
+    }
+    for ch in &c.children {
+        instances(ch, here, out);
+    }
+}
+
+/// Corners of a polygon of `c` in `c`'s frame.
+fn corners(c: &Cluster, k: usize) -> Vec<Vec3> {
+    let p = &c.polygons[k];
+    p.corners[..p.corner_count()]
+        .iter()
+        .map(|&i| c.vertices[i as usize])
+        .collect()
+}
+
+/// The child of `c` called `name`.
+fn child<'a>(c: &'a Cluster, name: &str) -> &'a Cluster {
+    c.children
+        .iter()
+        .find(|k| k.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no cluster '{name}'"))
+}
+
+/// Front radiosity of every polygon, by global id.
+#[derive(Default)]
+struct Radiosity(Vec<Vec<f32>>);
+
+impl Sink for Radiosity {
+    type Error = anyhow::Error;
+    fn polygon(&mut self, p: &PolygonResult<'_>) -> Result<()> {
+        let id = p.id as usize;
+        if self.0.len() <= id {
+            self.0.resize(id + 1, Vec::new());
+        }
+        self.0[id] = p.radiosity[0].to_vec();
+        Ok(())
+    }
+}
+
+fn solve(scene: &Scene, epsilon: f32) -> Radiosity {
+    let settings = Settings {
+        epsilon,
+        ..Settings::default()
+    };
+    let mut out = Radiosity::default();
+    solve_hr(
+        scene,
+        &settings,
+        2,
+        None,
+        VisibilityChoice::Obvhs,
+        &Progress::new(true),
+        &mut out,
+    )
+    .unwrap();
+    out
+}
+
+#[test]
+fn room_is_deterministic_valid_and_has_the_papers_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = room_scene(&[]);
+    let b = room_scene(&[]);
+    a.check().unwrap();
+    assert_eq!(
+        hirb(&a, dir.path(), "a.hirb"),
+        hirb(&b, dir.path(), "b.hirb")
+    );
+    let other = room_scene(&["--seed", "2"]);
+    assert_ne!(compile(&a).unwrap(), compile(&other).unwrap());
+
+    let image = compile(&a).unwrap();
+    let info = *read_image(&image).unwrap().info();
+    let n = info.expanded_polygons as f64;
+    assert!((n - 55_000.0).abs() <= 0.05 * 55_000.0, "{n} polygons");
+    assert_eq!(info.originals, 4);
+    assert_eq!((info.exact_instances, info.approximate_instances), (34, 0));
+    assert_eq!(info.instancing_depth, 1);
+    assert_eq!(a.band_names, ["red", "green", "blue"]);
+    assert!(!a.cameras.is_empty());
+    assert!(a.materials.iter().any(|m| m.data.emit_front[0] > 0.0));
+
+    let mut found = Vec::new();
+    instances(&a.root, Similarity::IDENTITY, &mut found);
+    let mut per_original = [0; 4];
+    for (c, _) in &found {
+        let i = c.instance.unwrap();
+        assert!(i.exact);
+        assert!(c.vertices.is_empty() && c.polygons.is_empty() && c.children.is_empty());
+        per_original[i.original] += 1;
+    }
+    assert_eq!(per_original, [24, 3, 3, 4]);
+    assert_eq!(
+        a.originals
+            .iter()
+            .map(|o| o.name.as_str())
+            .collect::<Vec<_>>(),
+        room::ORIGINALS
+    );
+    // Originals open level by level: parts are sub-clusters.
+    for o in &a.originals {
+        assert!(
+            o.root.children.len() >= 2 && o.root.polygons.is_empty(),
+            "{}",
+            o.name
+        );
+    }
+}
+
+#[test]
+fn room_walls_face_in_and_furniture_does_not_overlap() {
+    let s = room_scene(&[]);
+    let shell = child(&s.root, "room");
+    let size = Vec3::new(10.8, 7.8, 3.0);
+    for part in ["floor", "ceiling", "walls", "lights"] {
+        let c = child(shell, part);
+        assert!(!c.polygons.is_empty());
+        for k in 0..c.polygons.len() {
+            let p = corners(c, k);
+            let n = polygon_shape(&p).unwrap().normal;
+            for inside in [
+                size * 0.5,
+                Vec3::new(0.3, 0.4, 0.2),
+                size - Vec3::splat(0.3),
+            ] {
+                assert!(n.dot(inside - p[0]) > 0.0, "{part} polygon {k} faces out");
+            }
+        }
+    }
+
+    let boxes: Vec<Aabb> = s.originals.iter().map(|o| mesh::bounds(&o.root)).collect();
+    let mut found = Vec::new();
+    instances(&s.root, Similarity::IDENTITY, &mut found);
+    let world: Vec<Aabb> = found
+        .iter()
+        .map(|(c, t)| t.aabb(&boxes[c.instance.unwrap().original]))
+        .collect();
+    // Boxes of turned objects are rounded outwards a little: allow 0.1 mm below the floor.
+    let room = Aabb::new(Vec3::new(0.0, 0.0, -1e-4), size);
+    for (i, a) in world.iter().enumerate() {
+        assert!(room.contains(a), "{:?} leaves the room", found[i].0.name);
+        for (j, b) in world[..i].iter().enumerate() {
+            let meet = a.min.cmplt(b.max).all() && b.min.cmplt(a.max).all();
+            assert!(
+                !meet,
+                "{:?} and {:?} overlap",
+                found[i].0.name, found[j].0.name
+            );
+        }
+    }
+}
+
+#[test]
+fn room_options_change_the_counts() {
+    let s = room_scene(&[
+        "--chairs",
+        "10",
+        "--tables",
+        "1",
+        "--orchids",
+        "2",
+        "--plants",
+        "5",
+    ]);
+    s.check().unwrap();
+    let mut found = Vec::new();
+    instances(&s.root, Similarity::IDENTITY, &mut found);
+    let mut per_original = [0; 4];
+    for (c, _) in &found {
+        per_original[c.instance.unwrap().original] += 1;
+    }
+    assert_eq!(per_original, [10, 1, 2, 5]);
+    assert!(room::Args::from_words(["--chairs", "-1"]).is_err());
+    let crowded = room::Args::from_words(["-o", "x.hirb", "--chairs", "500"]).unwrap();
+    assert!(room::generate(&crowded).is_err());
+}
+
+#[test]
+fn room_solve_lights_every_floor_tile() {
+    let s = room_scene(&[]);
+    let r = solve(&s, 1e-2);
+    // The floor is the first cluster of the expansion: its polygons have the first ids.
+    let floor = child(child(&s.root, "room"), "floor").polygons.len();
+    assert!(floor > 100);
+    for (id, rad) in r.0[..floor].iter().enumerate() {
+        assert!(rad.iter().all(|&v| v > 0.0), "floor polygon {id}: {rad:?}");
+    }
+}
+
+#[test]
+fn canopy_is_deterministic_valid_and_as_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = canopy_scene(&[]);
+    a.check().unwrap();
+    assert_eq!(
+        hirb(&a, dir.path(), "a.hirb"),
+        hirb(&canopy_scene(&[]), dir.path(), "b.hirb")
+    );
+    assert_eq!(a.band_names, ["par", "nir"]);
+    assert_eq!(a.suns.len(), 1);
+    assert!(a.sky.len() > 20);
+    assert!(!a.cameras.is_empty());
+    let rows = &child(&a.root, "crop").children;
+    assert_eq!(rows.len(), 24);
+    assert!(rows.iter().all(|r| r.children.len() == 100));
+    let info = *read_image(&compile(&a).unwrap()).unwrap().info();
+    assert_eq!((info.originals, info.exact_instances), (5, 2400));
+    assert!(
+        info.expanded_polygons > 400_000,
+        "{}",
+        info.expanded_polygons
+    );
+
+    // Leaves are two-sided; leaf clusters (axis 1) hold only leaf polygons.
+    let leaf = a.material_index("leaf").unwrap();
+    assert!(a.materials[leaf].data.two_sided);
+    assert_eq!(a.materials[leaf].data.tau[..2], [0.05, 0.45]);
+    fn leaves_only(c: &Cluster, leaf: u32, count: &mut usize) {
+        if c.axis == Some(1) {
+            assert!(c.polygons.iter().all(|p| p.material == leaf));
+            *count += c.polygons.len();
+        }
+        for ch in &c.children {
+            leaves_only(ch, leaf, count);
+        }
+    }
+    let mut count = 0;
+    for o in &a.originals {
+        leaves_only(&o.root, leaf as u32, &mut count);
+    }
+    assert!(count > 5 * 11 * 7);
+
+    let w = canopy_scene(&["--crop", "wheat", "--rows", "3", "--plants-per-row", "7"]);
+    w.check().unwrap();
+    let rows = &child(&w.root, "crop").children;
+    assert_eq!(rows.len(), 3);
+    for (r, row) in rows.iter().enumerate() {
+        assert_eq!(row.children.len(), 7);
+        for p in &row.children {
+            let i = p.instance.unwrap();
+            assert!(i.exact);
+            let y = i.transform.translation.y;
+            assert!((y - 0.17 * r as f32).abs() < 0.03, "row {r} at {y}");
+        }
+    }
+    assert!(
+        w.materials[w.material_index("leaf").unwrap()]
+            .data
+            .two_sided
+    );
+}
+
+#[test]
+fn canopy_soil_is_darker_under_the_leaves_than_in_the_open() {
+    let (rows, per_row, rs, ps) = (5, 12, 0.75, 0.2);
+    let s = canopy_scene(&[
+        "--rows",
+        "5",
+        "--plants-per-row",
+        "12",
+        "--variants",
+        "3",
+        "--sky-rings",
+        "4",
+    ]);
+    let r = solve(&s, 1e-3);
+    // The soil is the first cluster of the expansion: its tiles have the first ids.
+    let soil = child(&s.root, "soil");
+    let mut centres = Vec::new();
+    for strip in &soil.children {
+        for k in 0..strip.polygons.len() {
+            let c = corners(strip, k);
+            centres.push(c.iter().copied().sum::<Vec3>() / c.len() as f32);
+        }
+    }
+    let (length, width) = ((per_row - 1) as f32 * ps, (rows - 1) as f32 * rs);
+    let (mut under, mut open) = (Vec::new(), Vec::new());
+    for (id, c) in centres.iter().enumerate() {
+        let between_rows = ((c.y / rs).fract() - 0.5).abs() < 0.01;
+        if between_rows && c.y > rs && c.y < width - rs && c.x > 0.5 && c.x < length - 0.5 {
+            under.push(r.0[id][0]);
+        }
+        // The sun shines from -x, -y: soil beyond those edges is in the open.
+        if c.x < -1.0 || c.y < -1.0 {
+            open.push(r.0[id][0]);
+        }
+    }
+    assert!(
+        under.len() >= 4 && open.len() >= 20,
+        "{} {}",
+        under.len(),
+        open.len()
+    );
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    let (u, o) = (mean(&under), mean(&open));
+    assert!(
+        u < 0.8 * o,
+        "soil under the canopy {u} W/m^2, in the open {o} W/m^2"
+    );
+}
