@@ -74,9 +74,7 @@ pub struct Args {
 /// A poplar's species for a tree of `age` years: the columnar poplar, with its trunk and
 /// main branches stretched to reach `height` (m) and `leaves` per shoot when given.
 pub fn species_for(age: f32, height: Option<f32>, leaves: Option<u32>) -> Result<Species> {
-    if !(age.is_finite() && (1.0..=100.0).contains(&age)) {
-        bail!("--age must lie in 1..=100 years, got {age}");
-    }
+    check_age(age)?;
     let mut s = Species::poplar();
     if let Some(h) = height {
         if !(h.is_finite() && (0.5..=150.0).contains(&h)) {
@@ -94,6 +92,14 @@ pub fn species_for(age: f32, height: Option<f32>, leaves: Option<u32>) -> Result
         s.shoot.leaf_spread = s.shoot.leaf_spread.min(n - 1);
     }
     Ok(s)
+}
+
+/// Checks a tree age (years).
+pub fn check_age(age: f32) -> Result<()> {
+    if !(age.is_finite() && (1.0..=100.0).contains(&age)) {
+        bail!("tree ages must lie in 1..=100 years, got {age}");
+    }
+    Ok(())
 }
 
 /// Checks a sun position given in degrees.
