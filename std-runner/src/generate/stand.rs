@@ -162,8 +162,8 @@ pub fn generate(a: &Args) -> Result<Scene> {
     );
     check(a, &ages, &counts)?;
     let bulbs = a.bulbs.unwrap_or(a.preset.bulbs());
-    if bulbs > 1000 {
-        bail!("--bulbs must be at most 1000, got {bulbs}");
+    if !(1..=1000).contains(&bulbs) {
+        bail!("--bulbs must lie in 1..=1000 (the bulbs are the stand's only light), got {bulbs}");
     }
     let rng = Rng::new(a.common.seed);
     let mut scene = a.bands.scene();

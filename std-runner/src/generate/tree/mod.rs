@@ -20,18 +20,3 @@ pub use axis::TreeMaterials;
 pub use instancing::{Approximate, Exact, approximate_originals, exact_variants, grow};
 pub use materials::Bands;
 pub use species::{SHOOT, Species, TRUNK};
-
-/// Polygons a tree cluster stands for once expanded, given the expanded counts of the
-/// scene's originals (exact instances count their original's).
-pub fn expanded_polygons(c: &crate::scene::Cluster, originals: &[u64]) -> u64 {
-    match &c.instance {
-        Some(i) if i.exact => originals.get(i.original).copied().unwrap_or(0),
-        _ => {
-            c.polygons.len() as u64
-                + c.children
-                    .iter()
-                    .map(|k| expanded_polygons(k, originals))
-                    .sum::<u64>()
-        }
-    }
-}
