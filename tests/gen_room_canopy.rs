@@ -6,7 +6,7 @@
 use anyhow::Result;
 use glam::Vec3;
 use hirad::generate::canopy;
-use hirad::generate::room::{self, mesh};
+use hirad::generate::{mesh, room};
 use hirad::output::Progress;
 use hirad::scene::{Cluster, Scene, compile, read_image};
 use hirad::solve::{VisibilityChoice, solve_hr};

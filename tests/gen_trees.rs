@@ -3,7 +3,7 @@
 //! options are refused before anything is written.
 
 use hirad::files::open_image;
-use hirad::generate::poplar::tree::Bands;
+use hirad::generate::tree::Bands;
 use hirad::generate::{Args, Common, Kind, forest, poplar, stand};
 use std::path::Path;
 

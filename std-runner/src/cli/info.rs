@@ -74,15 +74,8 @@ pub fn run(a: Args) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{}: {e}", a.scene.display()))?;
         report(format, &view)?
     };
-    print!(
-        "{}",
-        if a.json {
-            json(&a.scene, &r)
-        } else {
-            table(&a.scene, &r)
-        }
-    );
-    Ok(())
+    let text = if a.json { json(&a.scene, &r) } else { table(&a.scene, &r) };
+    super::print_out(&text)
 }
 
 fn table(path: &std::path::Path, r: &Report) -> String {

@@ -53,6 +53,17 @@ pub fn run() -> anyhow::Result<()> {
     }
 }
 
+/// Writes `text` to standard output. A closed pipe (`hirad info x | head -1`) ends the output
+/// quietly instead of failing.
+pub fn print_out(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => Ok(r?),
+    }
+}
+
 /// Prints loader warnings to stderr.
 pub(crate) fn warn_all(warnings: &[String], quiet: bool) {
     if quiet {

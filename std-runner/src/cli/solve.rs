@@ -259,10 +259,10 @@ pub fn run(a: Args) -> Result<()> {
     let comparison = outputs.finish()?;
     if let Some(c) = &comparison {
         report.set_comparison(c);
-        println!(
-            "error {:.4} % (L2, area-weighted, of the reference's largest radiosity {:.6} W/m^2) over {} polygons",
+        super::print_out(&format!(
+            "error {:.4} % (L2, area-weighted, of the reference's largest radiosity {:.6} W/m^2) over {} polygons\n",
             c.error_percent, c.reference_max, c.polygons
-        );
+        ))?;
     }
     if let Some(path) = &a.stats {
         report.write_json(path)?;

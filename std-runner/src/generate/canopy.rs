@@ -17,12 +17,10 @@
 //! Units: metres, W/m^2 (sun: 400 PAR and 420 NIR on a plane facing it; sky: 80 PAR and 60
 //! NIR on the horizontal).
 
-#[path = "crop.rs"]
-pub mod crop;
-
 use super::Common;
+use super::crop;
+use super::palette::{diffuse, two_sided};
 use super::rng::Rng;
-use super::room::palette::{diffuse, two_sided};
 use super::sky::{SkyModel, sky, sun};
 use crate::scene::{Camera, Cluster, InstanceOf, Original, Scene, Similarity};
 use anyhow::{Result, bail};
@@ -228,7 +226,7 @@ pub fn generate(a: &Args) -> Result<Scene> {
     let mut height = 0.0f32;
     for v in 0..a.variants {
         let root = build(&m, &mut rng.fork(1 + u64::from(v)));
-        height = height.max(super::room::mesh::bounds(&root).max.z);
+        height = height.max(super::mesh::bounds(&root).max.z);
         scene.originals.push(Original {
             name: format!("{name}{v}"),
             root,

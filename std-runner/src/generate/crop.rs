@@ -9,8 +9,8 @@
 //! 4 wheat tiller — and `age` is in days: the plant's days since emergence, an organ's days
 //! since it appeared (one leaf every [`PHYLLOCHRON`] days, from the bottom up).
 
+use crate::generate::mesh::{lathe, ribbon, tube};
 use crate::generate::rng::Rng;
-use crate::generate::room::mesh::{lathe, ribbon, tube};
 use crate::scene::Cluster;
 use glam::Vec3;
 use std::f32::consts::{PI, TAU};
@@ -256,7 +256,7 @@ pub fn wheat(m: &CropMaterials, rng: &mut Rng) -> Cluster {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::generate::room::mesh;
+    use crate::generate::mesh;
 
     const M: CropMaterials = CropMaterials {
         leaf: 0,

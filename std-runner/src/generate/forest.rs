@@ -9,15 +9,13 @@
 //! polygons), so that `--trees 1000` expands to about a billion polygons in a file of a few
 //! megabytes. Units: metres, years, W/m^2.
 
-#[path = "terrain.rs"]
-pub mod terrain;
-
 use super::Common;
-use super::poplar::tree::materials::{Bands, add_soil, add_tree_materials};
-use super::poplar::tree::site::{bounds, framing_camera, sun_and_sky};
-use super::poplar::tree::{Species, TRUNK, exact_variants, grow};
 use super::poplar::{check_age, check_sun};
 use super::rng::Rng;
+use super::terrain;
+use super::tree::materials::{Bands, add_soil, add_tree_materials};
+use super::tree::site::{bounds, framing_camera, sun_and_sky};
+use super::tree::{Species, TRUNK, exact_variants, grow};
 use crate::scene::{Cluster, InstanceOf, Original, Scene, Similarity};
 use anyhow::{Result, bail};
 use glam::{Quat, Vec3};

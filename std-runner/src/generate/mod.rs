@@ -2,18 +2,32 @@
 //! its botanical structure, a stand of poplars lit by bulbs, a furnished room, a forest, a crop
 //! canopy. Each writes the compact (instanced) scene: it never holds the expanded scene.
 
+pub mod bulb;
 pub mod canopy;
+pub mod crop;
 pub mod forest;
+pub mod furniture;
+pub mod houseplants;
+pub mod mesh;
+pub mod palette;
 pub mod poplar;
 pub mod rng;
 pub mod room;
+pub mod room_layout;
+pub mod room_shell;
 pub mod shapes;
 pub mod sky;
 pub mod stand;
+pub mod terrain;
+pub mod tree;
+
+#[cfg(test)]
+mod tests_trees;
 
 use crate::files::{self, Format};
 use crate::scene::Scene;
 use anyhow::{Result, anyhow, bail};
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -98,19 +112,22 @@ fn summary(scene: &Scene, path: &std::path::Path, bytes: u64, seconds: f64) -> R
     let image = crate::scene::compile(scene).map_err(|e| anyhow!("{e}"))?;
     let view = crate::scene::read_image(&image).map_err(|e| anyhow!("{e}"))?;
     let i = view.info();
-    println!(
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
         "wrote             {} ({bytes} bytes) in {seconds:.2} s",
         path.display()
     );
-    println!("polygons          {}", i.expanded_polygons);
-    println!("stored polygons   {}", i.polygons);
-    println!("instancing depth  {}", i.instancing_depth);
-    println!("originals         {}", i.originals);
-    println!(
+    let _ = writeln!(out, "polygons          {}", i.expanded_polygons);
+    let _ = writeln!(out, "stored polygons   {}", i.polygons);
+    let _ = writeln!(out, "instancing depth  {}", i.instancing_depth);
+    let _ = writeln!(out, "originals         {}", i.originals);
+    let _ = writeln!(
+        out,
         "instances         {} ({} exact, {} approximate)",
         i.exact_instances + i.approximate_instances,
         i.exact_instances,
         i.approximate_instances
     );
-    Ok(())
+    crate::cli::print_out(&out)
 }

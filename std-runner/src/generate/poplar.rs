@@ -8,15 +8,9 @@
 //! 5 originals (the paper's n, k and r), standing on a ground of tiles under a sun and a
 //! sky. Units: metres, years, W/m^2.
 
-#[path = "tree/mod.rs"]
-pub mod tree;
-
-#[cfg(test)]
-#[path = "tests_trees.rs"]
-mod tests_trees;
-
 use super::Common;
 use super::rng::Rng;
+use super::tree;
 use crate::scene::{Cluster, Original, Scene};
 use anyhow::{Result, bail};
 use tree::site::{bounds, framing_camera, ground, sun_and_sky};

@@ -16,21 +16,9 @@
 //! white; small and bright, so that they cover little of a picture and the automatic
 //! exposure settles on the lit room); the window panes emit 50 W/m^2 of bluish daylight.
 
-#[path = "furniture.rs"]
-pub mod furniture;
-#[path = "houseplants.rs"]
-pub mod houseplants;
-#[path = "mesh.rs"]
-pub mod mesh;
-#[path = "palette.rs"]
-pub mod palette;
-#[path = "room_layout.rs"]
-pub mod room_layout;
-#[path = "room_shell.rs"]
-pub mod room_shell;
-
 use super::Common;
 use super::rng::Rng;
+use super::{furniture, houseplants, mesh, palette, room_layout, room_shell};
 use crate::scene::{Camera, Cluster, InstanceOf, Original, Scene};
 use anyhow::{Result, bail};
 use furniture::FurnitureMaterials;

@@ -7,15 +7,13 @@
 //! instances of one bulb original of about 1,000 small emitting polygons in 8 clusters, hung
 //! among the crowns. Units: metres, years, W/m^2.
 
-#[path = "bulb.rs"]
-pub mod bulb;
-
 use super::Common;
-use super::poplar::tree::materials::{Bands, add_emitter, add_soil, add_tree_materials};
-use super::poplar::tree::site::{bounds, framing_camera, ground};
-use super::poplar::tree::{Species, TRUNK, approximate_originals};
+use super::bulb;
 use super::poplar::{check_age, grow_tree};
 use super::rng::Rng;
+use super::tree::materials::{Bands, add_emitter, add_soil, add_tree_materials};
+use super::tree::site::{bounds, framing_camera, ground};
+use super::tree::{Species, TRUNK, approximate_originals};
 use crate::scene::{Cluster, InstanceOf, Original, Scene, Similarity};
 use anyhow::{Result, bail};
 use bulb::{BulbShape, bulb};

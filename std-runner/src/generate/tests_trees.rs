@@ -3,10 +3,10 @@
 
 use crate::generate::Common;
 use crate::generate::forest;
-use crate::generate::poplar::tree::site::bounds;
-use crate::generate::poplar::tree::{Bands, SHOOT, Species, TRUNK};
 use crate::generate::poplar::{self, Preset};
 use crate::generate::stand;
+use crate::generate::tree::site::bounds;
+use crate::generate::tree::{Bands, SHOOT, Species, TRUNK};
 use crate::scene::{Cluster, ExpandVisitor, ExpandedNode, Scene, compile, expand, read_image};
 use hirad_core::image::SceneInfo;
 use std::path::PathBuf;
