@@ -324,14 +324,14 @@ fn plan_from<S: SceneSource>(
         }
     }
     let min_bytes = hi + ALIGN as u64;
-    // Refinement typically ends near some patches and tens of links per polygon at epsilon
-    // 1e-3, plus a few thousand for the large surfaces of a room, growing about as
-    // 1/epsilon; never suggest less than 16 MiB (nothing on a desktop; embedded callers set
-    // their own budget).
-    let scale = (1e-3 / settings.epsilon.max(1e-9)).clamp(0.1, 1000.0) as f64;
+    // Measured at epsilon 1e-3 (BENCHMARKS.md): plant and furniture scenes end near 1.3
+    // patches and 1 to 5 links per polygon; large surfaces (walls, floors) add some thousands
+    // of each, growing as 1/epsilon, the per-polygon part more slowly. Twice that, never less
+    // than 16 MiB (nothing on a desktop; embedded callers set their own budget).
+    let s = (1e-3 / settings.epsilon.max(1e-9)).clamp(0.1, 1000.0) as f64;
     let polys = c.polygons() as f64;
-    let patches = (polys * 8.0 + 4096.0) * scale;
-    let links = (polys * 60.0 + 8192.0) * scale;
+    let patches = 2.0 * (2.0 * polys * s.sqrt() + 8000.0 * s);
+    let links = 2.0 * (8.0 * polys * s.sqrt() + 12000.0 * s);
     let patch_avg = if polys > 0.0 {
         (c.polys_one_sided as f64 * st.patch1 as f64 + c.polys_two_sided as f64 * st.patch2 as f64)
             / polys

@@ -98,11 +98,8 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     }
     let size =
         usize::try_from(size).context("--memory does not fit this machine's address space")?;
-    let mut workspace = Vec::new();
-    workspace
-        .try_reserve_exact(size)
-        .map_err(|_| anyhow!("cannot allocate a workspace of {size} bytes"))?;
-    workspace.resize(size, 0u8);
+    // Zeroed pages come from the system lazily: only what the solver uses becomes resident.
+    let mut workspace = vec![0u8; size];
     let mut exec = RayonExecutor::new(threads)?;
     let mut adapter = ProgressAdapter {
         bar: progress,
