@@ -170,16 +170,7 @@ impl Args {
         I: IntoIterator<Item = T>,
         T: Into<std::ffi::OsString> + Clone,
     {
-        use clap::Parser;
-        #[derive(clap::Parser)]
-        #[command(name = "canopy")]
-        struct Words {
-            #[command(flatten)]
-            args: Args,
-        }
-        let words = std::iter::once(std::ffi::OsString::from("canopy"))
-            .chain(words.into_iter().map(Into::into));
-        Ok(Words::try_parse_from(words)?.args)
+        super::args_from_words("canopy", words)
     }
 }
 

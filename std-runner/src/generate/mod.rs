@@ -69,6 +69,21 @@ pub struct Common {
     pub quiet: bool,
 }
 
+/// Reads a generator's options from command-line words (without the command name), with the
+/// command line's own defaults: how tests and library callers build `Args`.
+pub fn args_from_words<A, I, T>(name: &'static str, words: I) -> Result<A>
+where
+    A: clap::Args + clap::FromArgMatches,
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let command = A::augment_args(clap::Command::new(name));
+    let words =
+        std::iter::once(std::ffi::OsString::from(name)).chain(words.into_iter().map(Into::into));
+    let matches = command.try_get_matches_from(words)?;
+    Ok(A::from_arg_matches(&matches)?)
+}
+
 /// Runs `hirad gen`.
 pub fn run(a: Args) -> Result<()> {
     let start = Instant::now();
