@@ -74,7 +74,11 @@ pub fn run(a: Args) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{}: {e}", a.scene.display()))?;
         report(format, &view)?
     };
-    let text = if a.json { json(&a.scene, &r) } else { table(&a.scene, &r) };
+    let text = if a.json {
+        json(&a.scene, &r)
+    } else {
+        table(&a.scene, &r)
+    };
     super::print_out(&text)
 }
 
