@@ -330,8 +330,8 @@ fn plan_from<S: SceneSource>(
     // than 16 MiB (nothing on a desktop; embedded callers set their own budget).
     let s = (1e-3 / settings.epsilon.max(1e-9)).clamp(0.1, 1000.0) as f64;
     let polys = c.polygons() as f64;
-    let patches = 2.0 * (2.0 * polys * s.sqrt() + 8000.0 * s);
-    let links = 2.0 * (8.0 * polys * s.sqrt() + 12000.0 * s);
+    let patches = 2.0 * (2.0 * polys * libm::sqrt(s) + 8000.0 * s);
+    let links = 2.0 * (8.0 * polys * libm::sqrt(s) + 12000.0 * s);
     let patch_avg = if polys > 0.0 {
         (c.polys_one_sided as f64 * st.patch1 as f64 + c.polys_two_sided as f64 * st.patch2 as f64)
             / polys
