@@ -221,6 +221,7 @@ fn bad_options_are_refused() {
     assert!(fails(&["solve", s(&box_), "--epsilon", "nan"]).contains("--epsilon"));
     assert!(fails(&["solve", s(&box_), "--threads", "0"]).contains("--threads"));
     assert!(fails(&["solve", s(&box_), "--memory", "1K"]).contains("needs"));
+    assert!(fails(&["solve", s(&box_), "--memory", "9000T"]).contains("cannot allocate"));
     let e = String::from_utf8(hirad(&["solve", s(&box_), "--memory", "lots"]).stderr).unwrap();
     assert!(e.contains("not a size"), "{e}");
     assert!(fails(&["solve", s(&box_), "--image", s(&d.join("x.bmp"))]).contains("x.bmp"));

@@ -98,7 +98,13 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     }
     let size =
         usize::try_from(size).context("--memory does not fit this machine's address space")?;
-    // Zeroed pages come from the system lazily: only what the solver uses becomes resident.
+    // Ask first, so that an impossible size is an error rather than an abort; then take zeroed
+    // pages, which the system hands out lazily: only what the solver uses becomes resident.
+    let mut probe: Vec<u8> = Vec::new();
+    probe
+        .try_reserve_exact(size)
+        .map_err(|_| anyhow!("cannot allocate a workspace of {size} bytes (--memory)"))?;
+    drop(probe);
     let mut workspace = vec![0u8; size];
     let mut exec = RayonExecutor::new(threads)?;
     let mut adapter = ProgressAdapter {
