@@ -26,7 +26,12 @@ struct Ctx<'a> {
 }
 
 /// Recomputes the closure factors of every sub-patch.
-pub(crate) fn update<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) {
+pub(crate) fn update<E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn super::exec::Progress,
+) {
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;
         let mut ctx = Ctx {
@@ -60,6 +65,13 @@ pub(crate) fn update<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallba
                     p.closure = [buf[2 * slot], buf[2 * slot + 1]];
                     c.st.set_patch(c.ws, e, &p);
                 }
+            },
+            &mut |done, total| {
+                progress.report(
+                    "closing (patches)",
+                    (done * CHUNK).min(n) as u64,
+                    (total * CHUNK).min(n) as u64,
+                )
             },
         );
     }

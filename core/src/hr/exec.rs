@@ -108,6 +108,7 @@ pub(crate) fn run_chunks<E: Executor, T>(
     out_len: usize,
     work: impl Fn(&T, usize, &mut [f32]) + Sync,
     mut apply: impl FnMut(&mut T, usize, &[f32]),
+    report: &mut dyn FnMut(usize, usize),
 ) where
     T: Sync,
 {
@@ -123,6 +124,7 @@ pub(crate) fn run_chunks<E: Executor, T>(
                     apply(ctx, c, ex.output(c, inner, out_len));
                 }
                 start = end;
+                report(start, n);
             }
             // The executor declined a batch: take chunks one by one from now on.
             Err(()) if batch > 1 => batch = 1,

@@ -455,16 +455,16 @@ where
         }
     };
     st.stats.workspace_bytes = total as u64;
-    progress.report("loaded", st.polygons as u64, st.polygons as u64);
+    progress.report("loaded (polygons)", st.polygons as u64, st.polygons as u64);
     let mut seq = exec::Fallback {
         inner: executor,
         scratch,
     };
-    refine::evaluate_pending(&mut st, ws, &vis, &mut seq);
+    refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
     for round in 0..settings.max_rounds {
         st.stats.rounds = round + 1;
         let refined = refine::refine_until_stable(&mut st, ws, &vis, &mut seq, progress);
-        closure::update(&mut st, ws, &mut seq);
+        closure::update(&mut st, ws, &mut seq, progress);
         solve::iterate(&mut st, ws, &mut seq, progress);
         if !refined && round > 0 {
             break;
@@ -475,7 +475,7 @@ where
     st.stats.clusters = st.clusters as u64;
     st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
-    progress.report("output", 0, st.polygons as u64);
+    progress.report("writing (polygons)", 0, st.polygons as u64);
     output::emit(&st, ws, sink).map_err(SolveError::Sink)?;
     Ok(st.stats)
 }

@@ -74,6 +74,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
     ws: &mut [u8],
     vis: &Vis<'_, V>,
     ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
 ) {
     let n = st.links.len as usize;
     let out = st.lay.strides.eval_out();
@@ -121,6 +122,13 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 c.st.stats.rays += o[kk + 2] as u64;
             }
         },
+        &mut |done, total| {
+            progress.report(
+                "evaluating links",
+                (done * CHUNK).min(n) as u64,
+                (total * CHUNK).min(n) as u64,
+            )
+        },
     );
 }
 
@@ -136,8 +144,8 @@ pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progre
     loop {
         st.stats.refinement_passes += 1;
         let changed = refine_pass(st, ws);
-        progress.report("refining", st.links.live() as u64, 0);
-        evaluate_pending(st, ws, vis, ex);
+        progress.report("refining (links)", st.links.live() as u64, 0);
+        evaluate_pending(st, ws, vis, ex, progress);
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
         if !changed {
             return any;

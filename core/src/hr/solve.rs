@@ -38,7 +38,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         let (change, b_max) = pull(st, ws);
         iterations = it + 1;
         st.stats.iterations += 1;
-        progress.report("solving", it as u64 + 1, 0);
+        progress.report("solving (iterations)", it as u64 + 1, 0);
         let scale = b_max.max(f32::MIN_POSITIVE);
         if change <= st.settings.tolerance * scale * 1e-3 {
             return iterations;
@@ -109,6 +109,7 @@ fn gather<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) 
                 }
             }
         },
+        &mut |_, _| {},
     );
 }
 
