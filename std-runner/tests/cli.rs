@@ -1,35 +1,10 @@
 //! The `hirad` binary end to end: every command on every fixture, round trips between the
 //! formats, located errors with a non-zero status, and no output left behind on failure.
 
+mod common;
+
+use common::{fails, fixture, hirad, ok, s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn hirad(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hirad"))
-        .args(args)
-        .output()
-        .expect("run hirad")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = hirad(args);
-    assert!(
-        out.status.success(),
-        "hirad {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Runs a command that must fail; returns its stderr.
-fn fails(args: &[&str]) -> String {
-    let out = hirad(args);
-    assert!(!out.status.success(), "hirad {args:?} should fail");
-    assert_eq!(out.status.code(), Some(1), "hirad {args:?}: exit status");
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert!(!err.contains("panicked"), "hirad {args:?} panicked:\n{err}");
-    err
-}
 
 fn fixtures() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures");
@@ -41,16 +16,6 @@ fn fixtures() -> Vec<PathBuf> {
     v.sort();
     assert!(v.len() >= 7, "expected the fixtures in {}", dir.display());
     v
-}
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fixtures")
-        .join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// The `polygons N` line of `hirad info`.

@@ -1,43 +1,9 @@
 //! `hirad solve` end to end: the image shows the scene, results are identical for any thread
 //! count, the reference error is printed, stats are complete, bad options are refused.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn hirad(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hirad"))
-        .args(args)
-        .output()
-        .expect("run hirad")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = hirad(args);
-    assert!(
-        out.status.success(),
-        "hirad {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = hirad(args);
-    assert_eq!(out.status.code(), Some(1), "hirad {args:?} should fail");
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert!(!err.contains("panicked"), "{err}");
-    err
-}
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fixtures")
-        .join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use common::{fails, fixture, hirad, ok, s};
 
 /// Mean of a channel over a block of pixels.
 fn mean(f: &hirad::output::Frame, ch: usize, x0: u32, y0: u32, w: u32, h: u32) -> f32 {

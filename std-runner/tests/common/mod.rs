@@ -1,0 +1,45 @@
+//! Running the `hirad` binary from the integration tests.
+#![allow(dead_code)] // each test file uses a different subset
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `hirad` with `args`.
+pub fn hirad(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hirad"))
+        .args(args)
+        .output()
+        .expect("run hirad")
+}
+
+/// Runs a command that must succeed; returns its stdout.
+pub fn ok(args: &[&str]) -> String {
+    let out = hirad(args);
+    assert!(
+        out.status.success(),
+        "hirad {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs a command that must fail with status 1 and no panic; returns its stderr.
+pub fn fails(args: &[&str]) -> String {
+    let out = hirad(args);
+    assert_eq!(out.status.code(), Some(1), "hirad {args:?}: exit status");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(!err.contains("panicked"), "hirad {args:?} panicked:\n{err}");
+    err
+}
+
+/// A file in fixtures/.
+pub fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures")
+        .join(name)
+}
+
+/// A path as an argument.
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
