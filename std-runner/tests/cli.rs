@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{fails, fixture, hirad, ok, s};
+use common::{fails, fixture, ok, s};
 use std::path::{Path, PathBuf};
 
 fn fixtures() -> Vec<PathBuf> {
