@@ -155,6 +155,12 @@ fn factors(st: &State, ws: &[u8], e: Elem) -> [f32; 2] {
             } else {
                 0.0
             };
+            // The patch's own links count as they are; only inherited ones are re-evaluated.
+            let eshape = if a == e {
+                None
+            } else {
+                Some(st.shape(ws, emit))
+            };
             for r in 0..sides {
                 let inherited: f32 = if kk == 1 {
                     k[0]
@@ -162,15 +168,15 @@ fn factors(st: &State, ws: &[u8], e: Elem) -> [f32; 2] {
                     k[r * 2] + k[r * 2 + 1]
                 };
                 den[r] += inherited as f64;
-                let own = match st.shape(ws, emit) {
-                    _ if a == e => inherited,
-                    Shape::Patch {
+                let own = match eshape {
+                    None => inherited,
+                    Some(Shape::Patch {
                         corners: ec,
                         n: en,
                         normal: enormal,
                         two_sided: etwo,
                         ..
-                    } => {
+                    }) => {
                         let nr = if r == 0 { normal } else { -normal };
                         let mut f = 0.0f32;
                         for q in 0..m {

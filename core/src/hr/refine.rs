@@ -335,6 +335,12 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
             let recv = Elem::new(kind, index);
             let mut prev = NONE;
             let mut cur = st.links_head(ws, recv);
+            if cur == NONE {
+                continue;
+            }
+            // The receiver's shape does not change while its links are refined (splitting
+            // it only adds children).
+            let rs = st.shape(ws, recv);
             while cur != NONE {
                 let l = st.link(ws, cur);
                 let next = l.next;
@@ -352,7 +358,6 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                     cur = next;
                     continue;
                 }
-                let rs = st.shape(ws, recv);
                 let es = st.shape(ws, emit);
                 let refine = self_link || {
                     let k: f32 = st.link_k(ws, cur).iter().sum();
