@@ -11,6 +11,14 @@ use glam::Vec3;
 pub trait Visibility: Sync {
     /// 1.0 when nothing blocks the open segment `from`..`to`, 0.0 when it is blocked.
     fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32;
+
+    /// The polygon that the segment `from..to` meets first (not one in `skip`) and the
+    /// segment parameter t (0 at `from`, 1 at `to`) where it does, or `None` when nothing
+    /// blocks. Nearest up to rounding: of polygons crossed at nearly the same t (coplanar
+    /// ones), any may be named. The solver uses it to tell light that leaves the scene from
+    /// light that is absorbed by the back of a one-sided polygon (the power balance, and
+    /// points buried inside closed objects).
+    fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)>;
 }
 
 /// Nothing ever blocks: for scenes known to be convex, and for tests.
@@ -21,10 +29,18 @@ impl Visibility for Unoccluded {
     fn transmittance(&self, _: Vec3, _: Vec3, _: [u32; 2]) -> f32 {
         1.0
     }
+
+    fn first_hit(&self, _: Vec3, _: Vec3, _: [u32; 2]) -> Option<(u32, f32)> {
+        None
+    }
 }
 
 impl<V: Visibility + ?Sized> Visibility for &V {
     fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
         (**self).transmittance(from, to, skip)
+    }
+
+    fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
+        (**self).first_hit(from, to, skip)
     }
 }

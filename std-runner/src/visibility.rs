@@ -197,6 +197,22 @@ impl ObvhsVisibility {
     }
 
     /// True when polygon `id` crosses the open segment `o + t d`, `T_MARGIN < t < 1 - T_MARGIN`.
+    /// The nearest crossing of polygon `id` by the segment `o + t d`, if any.
+    #[inline]
+    fn crossing_of(&self, id: usize, o: DVec3, d: DVec3) -> Option<f64> {
+        let t = &self.triangles[id];
+        let a = t[0].crossing(o, d);
+        let b = if self.counts[id] == 4 {
+            t[1].crossing(o, d)
+        } else {
+            None
+        };
+        match (a, b) {
+            (Some(x), Some(y)) => Some(x.min(y)),
+            (x, y) => x.or(y),
+        }
+    }
+
     #[inline]
     fn blocks(&self, id: usize, o: DVec3, d: DVec3) -> bool {
         let t = &self.triangles[id];
@@ -291,6 +307,26 @@ impl Prepared {
         }
     }
 
+    /// The parameter t at which the segment `o + t d` crosses the triangle (edges included),
+    /// if `T_MARGIN < t < 1 - T_MARGIN`: [`Prepared::crosses`] with the crossing's place.
+    #[inline]
+    pub fn crossing(&self, o: DVec3, d: DVec3) -> Option<f64> {
+        let so = self.n.dot(o - self.a);
+        let nd = self.n.dot(d);
+        let se = so + nd;
+        if nd == 0.0 || (so > 0.0 && se > 0.0) || (so < 0.0 && se < 0.0) {
+            return None;
+        }
+        let t = -so / nd;
+        let m = T_MARGIN as f64;
+        if !(t > m && t < 1.0 - m) {
+            return None;
+        }
+        let r = o + d * t - self.a;
+        let (u, v) = (r.dot(self.du), r.dot(self.dv));
+        (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then_some(t)
+    }
+
     /// Does the segment `o + t d` cross the triangle (edges included) with
     /// `T_MARGIN < t < 1 - T_MARGIN`? A segment parallel to the plane never crosses it; one
     /// whose ends lie strictly on one side is rejected before any division. No absolute
@@ -349,6 +385,47 @@ impl Visibility for ObvhsVisibility {
         });
         if clear { 1.0 } else { 0.0 }
     }
+
+    /// The nearest crossing by the same exact test as [`Visibility::transmittance`]; ties
+    /// between polygons crossed at the same t go to the lower id.
+    fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
+        let bvh = self.bvh.as_ref()?;
+        let d = to - from;
+        if !from.is_finite() || !d.is_finite() || d == Vec3::ZERO {
+            return None;
+        }
+        let origin = (from - self.centre) * self.inv_scale;
+        let dir = d * (self.inv_scale / RAY_STRETCH);
+        let (o, dd) = (from.as_dvec3(), d.as_dvec3());
+        if !origin.is_finite() || dir == Vec3::ZERO {
+            return self.first_hit_brute_force(from, to, skip);
+        }
+        let ray = Ray::new(
+            Vec3A::from(origin),
+            Vec3A::from(dir),
+            0.0,
+            RAY_STRETCH * (1.0 - T_MARGIN),
+        );
+        let mut best: Option<(u32, f64)> = None;
+        let mut hit = obvhs::ray::RayHit::none();
+        bvh.ray_traverse(ray, &mut hit, |_, k| {
+            let id = bvh.primitive_indices[k];
+            if id == skip[0] || id == skip[1] {
+                return f32::INFINITY;
+            }
+            match self.crossing_of(id as usize, o, dd) {
+                Some(t) => {
+                    if best.is_none_or(|(bid, bt)| t < bt || (t == bt && id < bid)) {
+                        best = Some((id, t));
+                    }
+                    // Keep looking a little beyond: f32 traversal against f64 crossings.
+                    (t as f32 * RAY_STRETCH) * (1.0 + 1e-5)
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best.map(|(id, t)| (id, t as f32))
+    }
 }
 
 impl ObvhsVisibility {
@@ -360,6 +437,28 @@ impl ObvhsVisibility {
         let blocked = (0..self.len())
             .any(|id| id as u32 != skip[0] && id as u32 != skip[1] && self.blocks(id, o, d));
         if blocked { 0.0 } else { 1.0 }
+    }
+
+    /// The same answer as [`Visibility::first_hit`] by testing every polygon (no BVH).
+    pub fn first_hit_brute_force(
+        &self,
+        from: Vec3,
+        to: Vec3,
+        skip: [u32; 2],
+    ) -> Option<(u32, f32)> {
+        let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
+        let mut best: Option<(u32, f64)> = None;
+        for id in 0..self.len() {
+            if id as u32 == skip[0] || id as u32 == skip[1] {
+                continue;
+            }
+            if let Some(t) = self.crossing_of(id, o, d) {
+                if best.is_none_or(|(_, bt)| t < bt) {
+                    best = Some((id as u32, t));
+                }
+            }
+        }
+        best.map(|(id, t)| (id, t as f32))
     }
 }
 

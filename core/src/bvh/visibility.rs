@@ -103,6 +103,10 @@ impl<P: PolygonSet> Visibility for BvhVisibility<'_, P> {
             1.0
         }
     }
+
+    fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
+        BvhVisibility::first_hit(self, from, to, skip)
+    }
 }
 
 #[cfg(test)]

@@ -1,37 +1,49 @@
-//! Exact closure of the irradiance a sub-patch inherits.
+//! Closure: in a closed part of a scene, what a leaf's links bring must add up to exactly all
+//! the light around it.
 //!
-//! A link attached to a patch is evaluated at that patch's quadrature points, and its
-//! irradiance is pushed unchanged to every sub-patch. At a given sub-patch the inherited form
-//! factors therefore do not sum to what the sub-patch itself sees: in a closed scene the sum
-//! is 1 only on average over the parent. With rho = 0.99 a sum of 1.01 somewhere is enough to
-//! diverge. After each refinement round every leaf sub-patch re-evaluates, at its own
-//! quadrature points and without occlusion, the exact form factors of the links its ancestor
-//! patches receive from other patches (visibility kept as the link's fraction), and scales
-//! the inherited irradiance by the ratio of that sum to the inherited one, per side. Sums at
-//! every leaf are then exact (a closed furnace holds `B = E / (1 - rho)` to float precision)
-//! at the cost of form-factor evaluations, no rays.
+//! From any point inside a closed room every direction ends on a surface, so its form
+//! factors to the scene sum to 1. The links a leaf receives (its own, its ancestor patches',
+//! its clusters') cover the scene once, but their coefficients are estimates: evaluated at a
+//! parent's quadrature points, through an emitting cluster's kernel, with visibility from a
+//! few rays. Their sum is 1 only on average, and in a closed scene with rho = 0.99 a sum of
+//! 1.01 somewhere is enough to diverge, 0.99 to lose a third of the light. So after every
+//! refinement round, when no ray from any patch leaves the scene (see `direct`), each leaf
+//! side measures its sum (one gather with every emitting side at radiosity 1) and divides
+//! what its links bring by it. In a scene that light can leave, the sums are not known (a
+//! few rays per patch cannot tell which see a little of the outside and how much), errors
+//! are not amplified by endless reflection, and coefficients stay as they are.
 
 use super::exec::{Executor, Fallback, run_chunks};
 use super::ids::{Elem, Kind};
 use super::layout::CHUNK;
-use super::state::{Shape, State};
-use crate::formfactor::{facing_side, point_polygon};
+use super::state::State;
 use crate::limits::NONE;
-use crate::sampling::{MAX_QUADRATURE, quadrature};
-use glam::Vec3;
 
 struct Ctx<'a> {
     st: &'a mut State,
     ws: &'a mut [u8],
 }
 
-/// Recomputes the closure factors of every sub-patch.
+/// Recomputes every leaf's closure factors (per side).
 pub(crate) fn update<E: Executor>(
     st: &mut State,
     ws: &mut [u8],
     ex: &mut Fallback<'_, E>,
     progress: &mut dyn super::exec::Progress,
 ) {
+    // Light leaves the scene somewhere: every factor stays 1.
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        for i in 0..st.pool(kind).len {
+            let e = Elem::new(kind, i);
+            let p = st.patch(ws, e);
+            if (0..State::sides(e)).any(|side| !p.closed(side)) {
+                return;
+            }
+        }
+    }
+    progress.report("closing (patches)", 0, 0);
+    super::solve::gather(st, ws, ex, true);
+    super::solve::push(st, ws);
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;
         let mut ctx = Ctx {
@@ -46,24 +58,29 @@ pub(crate) fn update<E: Executor>(
             |c: &Ctx<'_>, chunk, buf| {
                 for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                     let e = Elem::new(kind, i as u32);
-                    // NaN marks "unchanged": only patches under changed links are redone.
-                    let f = if needs_update(c.st, c.ws, e) {
-                        factors(c.st, c.ws, e)
-                    } else {
-                        [f32::NAN; 2]
-                    };
+                    let p = c.st.patch(c.ws, e);
+                    let mut f = [1.0f32; 2];
+                    if p.first_child == NONE {
+                        for (side, fs) in f.iter_mut().enumerate().take(State::sides(e)) {
+                            let sum =
+                                c.st.h(c.ws, e, side)[0] + c.st.polygon_h(c.ws, p.poly, side)[0];
+                            if sum > 0.0 && sum.is_finite() {
+                                *fs = 1.0 / sum;
+                            }
+                        }
+                    }
                     buf[2 * slot..2 * slot + 2].copy_from_slice(&f);
                 }
             },
             |c: &mut Ctx<'_>, chunk, buf| {
                 for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                    if buf[2 * slot].is_nan() {
-                        continue;
-                    }
                     let e = Elem::new(kind, i as u32);
                     let mut p = c.st.patch(c.ws, e);
-                    p.closure = [buf[2 * slot], buf[2 * slot + 1]];
-                    c.st.set_patch(c.ws, e, &p);
+                    let f = [buf[2 * slot], buf[2 * slot + 1]];
+                    if p.closure != f {
+                        p.closure = f;
+                        c.st.set_patch(c.ws, e, &p);
+                    }
                 }
             },
             &mut |done, total| {
@@ -75,135 +92,25 @@ pub(crate) fn update<E: Executor>(
             },
         );
     }
-    // Everything is up to date now.
-    for kind in [Kind::Patch1, Kind::Patch2] {
-        for i in 0..st.pool(kind).len {
-            let e = Elem::new(kind, i);
-            let mut p = st.patch(ws, e);
-            if p.stale() {
-                p.shape &= !super::records::STALE;
-                st.set_patch(ws, e, &p);
-            }
-        }
-    }
-}
-
-/// True if a leaf sub-patch or one of its ancestor patches had its links changed.
-fn needs_update(st: &State, ws: &[u8], e: Elem) -> bool {
-    let p = st.patch(ws, e);
-    if p.first_child != NONE || Elem(p.parent).kind() == Kind::Cluster {
-        return false;
-    }
-    let mut a = e;
-    while a.is_patch() {
-        let ap = st.patch(ws, a);
-        if ap.stale() {
-            return true;
-        }
-        a = Elem(ap.parent);
-    }
-    false
 }
 
 /// The irradiance of a leaf patch's side (W/m^2 per band): what it gathered and inherited
-/// from ancestor patches, scaled by its closure factor, plus a quarter of the flux density of
-/// its polygon's cluster (isotropic).
+/// from ancestor patches plus its polygon's share of what its clusters receive (by the
+/// polygon's own cosine, see `oriented`), scaled by its closure factor, plus the direct
+/// light of suns and sky.
 pub(crate) fn leaf_irradiance(st: &State, ws: &[u8], e: Elem, side: usize, out: &mut [f32]) {
     let p = st.patch(ws, e);
-    let root = st.patch(ws, Elem(st.polygon(ws, p.poly).root));
-    let cluster = st.h(ws, Elem(root.parent), 0);
     let c = p.closure[side.min(1)];
-    for ((o, h), hc) in out.iter_mut().zip(st.h(ws, e, side)).zip(cluster) {
-        *o = c * h + 0.25 * hc;
+    for ((o, h), hc) in out
+        .iter_mut()
+        .zip(st.h(ws, e, side))
+        .zip(st.polygon_h(ws, p.poly, side))
+    {
+        *o = c * (h + hc);
     }
-}
-
-/// The closure factors of one patch (1 for roots and for patches with children).
-fn factors(st: &State, ws: &[u8], e: Elem) -> [f32; 2] {
-    let p = st.patch(ws, e);
-    if p.first_child != NONE || Elem(p.parent).kind() == Kind::Cluster {
-        return [1.0; 2];
-    }
-    let Shape::Patch {
-        corners,
-        n,
-        normal,
-        two_sided,
-        ..
-    } = st.shape(ws, e)
-    else {
-        return [1.0; 2];
-    };
-    let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
-    let m = quadrature(&corners[..n], &mut pts, &mut wts);
-    let sides = if two_sided { 2 } else { 1 };
-    let kk = st.lay.strides.link_k;
-    let (mut num, mut den) = ([0.0f64; 2], [0.0f64; 2]);
-    // The patch's own links count as they are (they were evaluated at these very points), so
-    // that the factor can scale its whole patch-gathered irradiance.
-    let mut a = e;
-    while a.is_patch() {
-        let ap = st.patch(ws, a);
-        let mut cur = ap.links;
-        while cur != NONE {
-            let l = st.link(ws, cur);
-            let k = st.link_k(ws, cur);
-            let emit = Elem(l.emit);
-            let sum_k: f32 = k.iter().sum();
-            let vis = if l.k_open > 0.0 {
-                (sum_k / l.k_open).min(1.0)
-            } else {
-                0.0
-            };
-            // The patch's own links count as they are; only inherited ones are re-evaluated.
-            let eshape = if a == e {
-                None
-            } else {
-                Some(st.shape(ws, emit))
-            };
-            for r in 0..sides {
-                let inherited: f32 = if kk == 1 {
-                    k[0]
-                } else {
-                    k[r * 2] + k[r * 2 + 1]
-                };
-                den[r] += inherited as f64;
-                let own = match eshape {
-                    None => inherited,
-                    Some(Shape::Patch {
-                        corners: ec,
-                        n: en,
-                        normal: enormal,
-                        two_sided: etwo,
-                        ..
-                    }) => {
-                        let nr = if r == 0 { normal } else { -normal };
-                        let mut f = 0.0f32;
-                        for q in 0..m {
-                            let Some(s) = facing_side(pts[q], ec[0], enormal) else {
-                                continue;
-                            };
-                            if s == 1 && (!etwo || kk == 1) {
-                                continue;
-                            }
-                            f += wts[q] * point_polygon(pts[q], nr, &ec[..en]);
-                        }
-                        f * vis
-                    }
-                    // Cluster and source kernels are kept as inherited.
-                    _ => inherited,
-                };
-                num[r] += own as f64;
-            }
-            cur = l.next;
-        }
-        a = Elem(ap.parent);
-    }
-    let mut out = [1.0f32; 2];
-    for r in 0..sides {
-        if den[r] > 0.0 {
-            out[r] = (num[r] / den[r]) as f32;
+    if let Some(d) = st.direct(ws, e, side) {
+        for (o, v) in out.iter_mut().zip(d) {
+            *o += v;
         }
     }
-    out
 }

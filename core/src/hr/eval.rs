@@ -28,6 +28,12 @@ pub(crate) struct Coefficients {
     pub open: f32,
     pub partial: bool,
     pub rays: u32,
+    /// To a cluster: the light's mean direction over its flux density (see `Link::dir`).
+    pub dir: Vec3,
+    /// To a patch: how much the coefficient varies over the patch (largest minus smallest
+    /// value at its quadrature points, per receiving side, the larger side): the error of
+    /// taking it as constant there.
+    pub spread: f32,
 }
 
 /// Receiving sides of an element: both for a two-sided patch, the front otherwise (the back
@@ -47,6 +53,29 @@ fn emits(shape: &Shape, s: usize) -> bool {
         Shape::Patch { two_sided, .. } => s == 0 || *two_sided,
         _ => s == 0,
     }
+}
+
+/// The patch's quadrature points with the buried ones weighted 0 and the others' weights
+/// scaled to sum to 1 (all 0 when every point is buried); returns the point count.
+pub(crate) fn exposed_quadrature(
+    p: &super::records::Patch,
+    corners: &[Vec3],
+    points: &mut [Vec3; MAX_QUADRATURE],
+    weights: &mut [f32; MAX_QUADRATURE],
+) -> usize {
+    let m = quadrature(corners, points, weights);
+    let mut total = 0.0f32;
+    for (q, w) in weights.iter_mut().enumerate().take(m) {
+        if p.buried(q) {
+            *w = 0.0;
+        }
+        total += *w;
+    }
+    let inv = if total > 0.0 { 1.0 / total } else { 0.0 };
+    for w in weights.iter_mut().take(m) {
+        *w *= inv;
+    }
+    m
 }
 
 pub(crate) fn evaluate<V: Visibility + ?Sized>(
@@ -69,30 +98,55 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
             poly,
             ..
         } => {
-            let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
-            let m = quadrature(&corners[..n], &mut pts, &mut wts);
+            // Buried points receive nothing, but count for the open coefficient: a patch
+            // whose points are all buried may still be partly exposed, and its links must
+            // live on to be refined where it is.
+            let (mut pts, mut plain) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+            let m = quadrature(&corners[..n], &mut pts, &mut plain);
+            let rp = st.patch(ws, recv);
+            let mut wts = [0.0f32; MAX_QUADRATURE];
+            exposed_quadrature(&rp, &corners[..n], &mut pts, &mut wts);
+            let (mut lo, mut hi) = ([f32::INFINITY; 2], [0.0f32; 2]);
             for q in 0..m {
                 let (x, w) = (pts[q], wts[q]);
+                out.partial |= w == 0.0;
                 for side in 0..recv_sides(&r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
                     let (contrib, open, s_side) =
                         to_point(st, ws, x, nr, poly, &e, emit, qs, rays, vis, &mut out);
+                    out.open += plain[q] * open;
+                    if w == 0.0 {
+                        continue;
+                    }
                     out.k[side][s_side] += w * contrib;
-                    out.open += w * open;
+                    lo[side] = lo[side].min(contrib);
+                    hi[side] = hi[side].max(contrib);
+                }
+            }
+            for side in 0..recv_sides(&r) {
+                if hi[side] > 0.0 {
+                    out.spread = out.spread.max(hi[side] - lo[side].min(hi[side]));
                 }
             }
         }
         Shape::Cluster { .. } => {
             let inv = 1.0 / rays as f32;
+            let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
             for k in 0..rays {
                 let (x, px) = point_in(st, ws, recv, hash3(seed, k, 0xC1));
-                let (f, open, s_side, v) =
+                let (f, open, s_side, v, d) =
                     flux_at(st, ws, x, px, &e, emit, hash3(seed, k, 0xE1), vis);
                 out.rays += (f > 0.0 || open > 0.0) as u32;
                 out.k[0][s_side] += inv * f * v;
                 out.open += inv * open;
                 out.partial |= v < 1.0 && open > 0.0;
+                sum += d * (f * v);
+                weight += f * v;
+            }
+            // With every sample hidden, the open light's direction still orients the polygons.
+            if weight > 0.0 {
+                out.dir = sum / weight;
             }
         }
         Shape::Source { .. } => {}
@@ -201,7 +255,7 @@ fn flux_at<V: Visibility + ?Sized>(
     emit: Elem,
     seed: u32,
     vis: &V,
-) -> (f32, f32, usize, f32) {
+) -> (f32, f32, usize, f32, Vec3) {
     match *e {
         Shape::Patch {
             corners,
@@ -212,33 +266,35 @@ fn flux_at<V: Visibility + ?Sized>(
             ..
         } => {
             let Some(s_side) = facing_side(x, corners[0], normal) else {
-                return (0.0, 0.0, 0, 1.0);
+                return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
             };
             if !emits(e, s_side) {
-                return (0.0, 0.0, s_side, 1.0);
+                return (0.0, 0.0, s_side, 1.0, Vec3::ZERO);
             }
             let (u, v) = unit2(seed);
             let y = point_on(&corners[..n], u, v);
             let d = x - y;
             let d2 = d.length_squared();
             if d2 <= 0.0 {
-                return (0.0, 0.0, s_side, 1.0);
+                return (0.0, 0.0, s_side, 1.0, Vec3::ZERO);
             }
-            let c = normal.dot(d).abs() / libm::sqrtf(d2);
+            let len = libm::sqrtf(d2);
+            let c = normal.dot(d).abs() / len;
             let f = area * c / (PI * d2 + area);
             let vis = vis.transmittance(x, y, [px, ep]);
-            (f, f, s_side, vis)
+            (f, f, s_side, vis, -d / len)
         }
         Shape::Cluster { area, .. } => {
             let (y, py) = point_in(st, ws, emit, seed);
-            let d2 = (x - y).length_squared();
+            let d = y - x;
+            let d2 = d.length_squared();
             let f = area / (4.0 * PI * d2 + area);
             let v = vis.transmittance(x, y, [px, py]);
-            (f, f, 0, v)
+            (f, f, 0, v, d.normalize_or_zero())
         }
         Shape::Source { towards } => {
             let v = vis.transmittance(x, x + towards * st.far, [px, NONE]);
-            (1.0, 1.0, 0, v)
+            (1.0, 1.0, 0, v, towards)
         }
     }
 }

@@ -28,6 +28,9 @@ pub(crate) const CHUNK: usize = 64;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Strides {
     pub bands: usize,
+    /// True when the scene has suns or sky directions: patches keep their direct light.
+    pub direct: bool,
+    pub polygon: usize,
     pub cluster: usize,
     pub patch1: usize,
     pub patch2: usize,
@@ -38,28 +41,38 @@ pub(crate) struct Strides {
 }
 
 impl Strides {
-    pub(crate) fn new(bands: usize, any_two_sided: bool) -> Strides {
+    pub(crate) fn new(bands: usize, any_two_sided: bool, sources: bool) -> Strides {
         let link_k = if any_two_sided { 4 } else { 1 };
+        // Per side: radiosity, gathered irradiance and, with sources, direct irradiance.
+        let per_side = 4 * bands * if sources { 3 } else { 2 };
         Strides {
             bands,
-            cluster: core::mem::size_of::<Cluster>() + 8 * bands,
-            patch1: core::mem::size_of::<Patch>() + 8 * bands,
-            patch2: core::mem::size_of::<Patch>() + 16 * bands,
+            direct: sources,
+            polygon: core::mem::size_of::<Polygon>() + 16 * bands,
+            cluster: core::mem::size_of::<Cluster>() + 4 * bands,
+            patch1: core::mem::size_of::<Patch>() + per_side,
+            patch2: core::mem::size_of::<Patch>() + 2 * per_side,
             source: core::mem::size_of::<Source>() + 4 * bands,
-            link: core::mem::size_of::<Link>() + 4 * link_k,
+            link: core::mem::size_of::<Link>() + 4 * link_k + 4 * bands,
             link_k,
         }
     }
 
     /// Floats an evaluated link hands back: its coefficients, the open coefficient, the
-    /// partial-visibility flag and the rays cast.
+    /// partial-visibility flag, the rays cast, the light's mean direction and the spread.
     pub(crate) fn eval_out(&self) -> usize {
-        self.link_k + 3
+        self.link_k + 7
     }
 
     /// Floats a gathered receiver hands back: irradiance per side and band.
     pub(crate) fn gather_out(&self) -> usize {
         2 * self.bands
+    }
+
+    /// Floats a prepared patch hands back: its buried points, exposure, shadow measure,
+    /// direct irradiance per side and band, and the rays cast.
+    pub(crate) fn prepare_out(&self) -> usize {
+        4 + 2 * self.bands
     }
 }
 
@@ -69,6 +82,8 @@ pub(crate) struct Layout {
     pub strides: Strides,
     pub materials: usize,
     pub polygons: usize,
+    /// The cluster-order array: polygon indices, each cluster's consecutive.
+    pub order: usize,
     pub clusters: usize,
     pub children: usize,
     pub sources: usize,
@@ -119,7 +134,7 @@ impl Layout {
         total: usize,
     ) -> Option<Layout> {
         let any_two = census.polys_two_sided > 0;
-        let strides = Strides::new(bands, any_two);
+        let strides = Strides::new(bands, any_two, sources > 0);
         let n_clusters = u32::try_from(census.clusters)
             .ok()
             .filter(|&c| c <= super::ids::Elem::MAX_INDEX)?;
@@ -133,13 +148,19 @@ impl Layout {
             Some(start)
         };
         let materials_at = region(materials as usize * core::mem::size_of::<Material>())?;
-        let polygons_at = region(n_polygons as usize * core::mem::size_of::<Polygon>())?;
+        let polygons_at = region((n_polygons as usize).checked_mul(strides.polygon)?)?;
+        let order_at = region(n_polygons as usize * 4)?;
         let clusters_at = region((n_clusters as usize).checked_mul(strides.cluster)?)?;
         let children_at = region((n_clusters as usize + n_polygons as usize) * 4)?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
-        let scratch_floats = CHUNK * strides.eval_out().max(strides.gather_out());
+        let scratch_floats = CHUNK
+            * strides
+                .eval_out()
+                .max(strides.gather_out())
+                .max(strides.prepare_out())
+                .max(strides.bands);
         let _ = settings;
         let before_tables = at;
         let bvh_bytes = if internal_bvh {
@@ -178,6 +199,7 @@ impl Layout {
             strides,
             materials: materials_at,
             polygons: polygons_at,
+            order: order_at,
             clusters: clusters_at,
             children: children_at,
             sources: sources_at,

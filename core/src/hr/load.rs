@@ -77,6 +77,9 @@ pub(crate) fn load<S: SceneSource>(
         polygons: 0,
         child_entries: 0,
         power: 0.0,
+        suns: info.suns,
+        sources: info.suns + info.sky,
+        typical_area: 0.0,
         min_area: 0.0,
         far: 0.0,
         stats: Stats {
@@ -115,18 +118,16 @@ pub(crate) fn load<S: SceneSource>(
     }
     load_tree(view, &mut s, ws)?;
     finish_clusters(&mut s, ws);
+    cluster_order(&mut s, ws);
     totals(&mut s, ws, info.suns + info.sky);
     if s.power.is_nan() || s.power <= 0.0 {
         return Err(HrError::NoLight);
     }
-    // The initial links: a self-link on the root, and every source to the root.
+    // The initial link: a self-link on the root. Suns and sky light every patch directly
+    // (see `direct`).
     let root = Elem::new(Kind::Cluster, 0);
     super::refine::add_link(&mut s, ws, root, root, 0)
         .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
-    for k in 0..info.suns + info.sky {
-        super::refine::add_link(&mut s, ws, root, Elem::new(Kind::Source, k), PENDING)
-            .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
-    }
     Ok(s)
 }
 
@@ -164,11 +165,12 @@ fn new_cluster(s: &mut State, ws: &mut [u8], parent: u32) -> Result<u32, HrError
         links: NONE,
         area: 0.0,
         polygons: 0,
+        first_polygon: 0,
+        reserved: 0,
     };
     s.set_cluster(ws, i, &c);
     let e = Elem::new(Kind::Cluster, i);
     s.b_mut(ws, e, 0).fill(0.0);
-    s.h_mut(ws, e, 0).fill(0.0);
     Ok(i)
 }
 
@@ -357,25 +359,37 @@ fn add_root_patch(
         poly,
         links: NONE,
         area: shape.area,
-        shape: corners.len() as u32,
+        shape: corners.len() as u32 | UNPREPARED,
         closure: [1.0; 2],
+        exposed: 1.0,
+        shadow: 0.0,
     };
     s.set_patch(ws, e, &p);
     for side in 0..State::sides(e) {
         let b = s.b_mut(ws, e, side);
         b.copy_from_slice(&m.emit[side][..b.len()]);
         s.h_mut(ws, e, side).fill(0.0);
+        if let Some(d) = s.direct_mut(ws, e, side) {
+            d.fill(0.0);
+        }
     }
     let rec = Polygon {
         normal: shape.normal.to_array(),
         material,
         root: e.0,
     };
-    write(
-        ws,
-        s.lay.polygons + poly as usize * core::mem::size_of::<Polygon>(),
-        &rec,
-    );
+    s.set_polygon(ws, poly, &rec);
+    for side in 0..2 {
+        s.polygon_h_mut(ws, poly, side).fill(0.0);
+        let power = s.polygon_power_mut(ws, poly, side);
+        for (p, &em) in power.iter_mut().zip(&m.emit[side.min(State::sides(e) - 1)]) {
+            *p = if side < State::sides(e) {
+                em * shape.area
+            } else {
+                0.0
+            };
+        }
+    }
     Ok(e)
 }
 
@@ -518,19 +532,52 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
     }
 }
 
-/// The scene's emitted power (epsilon's unit), the minimum patch area and the ray length
-/// that leaves the scene.
+/// Each cluster's polygons, consecutive in the cluster-order array: parents are numbered
+/// before their children, so walking clusters in order places every child range inside its
+/// parent's.
+fn cluster_order(s: &mut State, ws: &mut [u8]) {
+    for i in 0..s.clusters {
+        let c = s.cluster(ws, i);
+        let mut at = c.first_polygon;
+        for k in 0..c.child_count {
+            let e = s.child(ws, c.children + k);
+            if e.kind() == Kind::Cluster {
+                let mut cc = s.cluster(ws, e.index());
+                cc.first_polygon = at;
+                at += cc.polygons;
+                s.set_cluster(ws, e.index(), &cc);
+            } else {
+                let poly = s.patch(ws, e).poly;
+                s.set_ordered(ws, at, poly);
+                at += 1;
+            }
+        }
+    }
+}
+
+/// The scene's emitted power (epsilon's first unit), the typical polygon area, the minimum
+/// patch area and the ray length that leaves the scene.
 fn totals(s: &mut State, ws: &[u8], sources: u32) {
     let nb = s.bands;
     let mut power = [0.0f64; MAX_BANDS];
+    let (mut log_area, mut counted) = (0.0f64, 0u64);
     for i in 0..s.polygons {
         let poly = s.polygon(ws, i);
         let m = s.material(ws, poly.material);
         let area = s.patch(ws, Elem(poly.root)).area as f64;
+        if area > 0.0 {
+            log_area += libm::log(area);
+            counted += 1;
+        }
         for (b, p) in power.iter_mut().enumerate().take(nb) {
             *p += area * (m.emit[0][b] as f64 + m.emit[1][b] as f64);
         }
     }
+    s.typical_area = if counted > 0 {
+        libm::exp(log_area / counted as f64) as f32
+    } else {
+        0.0
+    };
     let root = s.cluster(ws, 0);
     let (lo, hi) = (Vec3::from(root.bbox_min), Vec3::from(root.bbox_max));
     let d = hi - lo;

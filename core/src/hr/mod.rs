@@ -18,11 +18,13 @@
 
 mod census;
 mod closure;
+mod direct;
 mod eval;
 mod exec;
 mod ids;
 mod layout;
 mod load;
+mod oriented;
 mod output;
 mod pool;
 mod records;
@@ -460,12 +462,16 @@ where
         inner: executor,
         scratch,
     };
+    direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+    solve::pull(&st, ws);
+    st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
     refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
     for round in 0..settings.max_rounds {
         st.stats.rounds = round + 1;
         let refined = refine::refine_until_stable(&mut st, ws, &vis, &mut seq, progress);
         closure::update(&mut st, ws, &mut seq, progress);
         solve::iterate(&mut st, ws, &mut seq, progress);
+        st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
         if !refined && round > 0 {
             break;
         }

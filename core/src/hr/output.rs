@@ -1,5 +1,5 @@
 //! Handing the finished solution to the sink: every input polygon in global-id order, its
-//! leaf patches first, then its area-weighted means.
+//! leaf patches first, then its area-weighted means (buried parts count as dark).
 
 use super::ids::Elem;
 use super::state::State;
@@ -14,6 +14,7 @@ pub(crate) fn emit<K: Sink>(st: &State, ws: &[u8], sink: &mut K) -> Result<(), K
         let root = Elem(poly.root);
         let sides = State::sides(root);
         let normal = Vec3::from(poly.normal);
+        let m = st.material(ws, poly.material);
         let (mut b_sum, mut h_sum) = ([[0.0f64; 8]; 2], [[0.0f64; 8]; 2]);
         let mut area = 0.0f64;
         // Depth-first over the quadtree: at most 3 pending siblings per level.
@@ -44,15 +45,18 @@ pub(crate) fn emit<K: Sink>(st: &State, ws: &[u8], sink: &mut K) -> Result<(), K
                 normal,
                 radiosity: [front, back],
             })?;
+            // Buried parts receive nothing and show only their emission.
             let a = p.area as f64;
+            let seen = a * p.exposed as f64;
             area += a;
             for side in 0..sides {
                 let b = st.b(ws, e, side).unwrap_or(&[]);
                 let mut h = [0.0f32; 8];
                 super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
                 for k in 0..nb {
-                    b_sum[side][k] += a * b.get(k).copied().unwrap_or(0.0) as f64;
-                    h_sum[side][k] += a * h[k] as f64;
+                    let bk = b.get(k).copied().unwrap_or(0.0) as f64;
+                    b_sum[side][k] += seen * bk + (a - seen) * m.emit[side][k] as f64;
+                    h_sum[side][k] += seen * h[k] as f64;
                 }
             }
         }

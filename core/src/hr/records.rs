@@ -26,6 +26,15 @@ pub(crate) struct Patch {
     /// patches exact at this patch's own quadrature points (see `closure`): 1 when the
     /// patch inherits nothing.
     pub closure: [f32; 2],
+    /// Fraction of the area not buried inside closed objects (0..=1): the weight of the
+    /// patch's radiosity in its parent's (see `direct`). Points of a floor under a block see
+    /// nothing and are seen by nothing; averaging their darkness into the visible part would
+    /// darken what the block's faces receive from the floor.
+    pub exposed: f32,
+    /// How strongly the direct light of suns and sky varies over the patch (W: the power of
+    /// the direct light that falls on its lit part, times the lit fraction's distance from
+    /// uniform); drives subdivision at shadow edges.
+    pub shadow: f32,
 }
 
 impl Patch {
@@ -40,6 +49,21 @@ impl Patch {
     /// factors were computed (or it is new).
     pub(crate) fn stale(&self) -> bool {
         self.shape & STALE != 0
+    }
+
+    /// True when quadrature point `q` lies inside a closed object (see `direct`).
+    pub(crate) fn buried(&self, q: usize) -> bool {
+        self.shape & (BURIED << q) != 0
+    }
+
+    /// True when no ray from side `side` leaves the scene (see `closure`).
+    pub(crate) fn closed(&self, side: usize) -> bool {
+        self.shape & (CLOSED << side.min(1)) != 0
+    }
+
+    /// True when the patch's exposure and direct light wait to be computed.
+    pub(crate) fn unprepared(&self) -> bool {
+        self.shape & UNPREPARED != 0
     }
 }
 
@@ -63,6 +87,11 @@ pub(crate) struct Cluster {
     pub area: f32,
     /// Number of input polygons inside.
     pub polygons: u32,
+    /// First of its polygons in the cluster-order array (a cluster's polygons are
+    /// consecutive there).
+    pub first_polygon: u32,
+    /// Unused.
+    pub reserved: u32,
 }
 
 /// A directional source: a sun or one sky direction.
@@ -75,7 +104,10 @@ pub(crate) struct Source {
     pub reserved: u32,
 }
 
-/// An input polygon: what every patch of it shares.
+/// An input polygon: what every patch of it shares. Followed, per side and band, by its
+/// cluster irradiance (W/m^2: what the links its clusters receive give it, with the
+/// polygon's own orientation), then per side and band its emitted power (W: radiosity times
+/// exposed area), which its clusters radiate with the polygon's orientation.
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 #[repr(C)]
 pub(crate) struct Polygon {
@@ -100,6 +132,8 @@ pub(crate) struct Material {
 /// A link: light gathered by `recv` from `emit`. The coefficients follow the header: `k[r][s]`
 /// turns the emitter's side-`s` radiosity into irradiance on the receiver's side `r`; one
 /// coefficient (front from front) in scenes without two-sided materials, four otherwise.
+/// Then, per band, the flux density it brings a receiving cluster in the current iteration
+/// (W/m^2 on a plane facing the emitter), which its polygons share by their cosines.
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 #[repr(C)]
 pub(crate) struct Link {
@@ -112,10 +146,22 @@ pub(crate) struct Link {
     /// The same coefficients without occlusion, summed over sides (drives refinement of
     /// partly or wholly hidden links).
     pub k_open: f32,
+    /// For a receiving cluster: the mean direction of the light from the emitter, weighted
+    /// by its flux density, over the flux density (length 1 for a beam, less for light from
+    /// a wide emitter; see `oriented`). Zero otherwise.
+    pub dir: [f32; 3],
+    /// For a receiving patch: how much the coefficient varies over it (see `refine`).
+    pub spread: f32,
 }
 
 /// Patch `shape` bit: the patch's received links changed (see `Patch::stale`).
 pub(crate) const STALE: u32 = 1 << 16;
+/// Patch `shape` bits 17..=20: quadrature point q is buried (see `Patch::buried`).
+pub(crate) const BURIED: u32 = 1 << 17;
+/// Patch `shape` bit: exposure and direct light not computed yet.
+pub(crate) const UNPREPARED: u32 = 1 << 21;
+/// Patch `shape` bits 22 (front) and 23 (back): no ray from that side leaves the scene.
+pub(crate) const CLOSED: u32 = 1 << 22;
 
 /// The link's coefficients have not been computed yet.
 pub(crate) const PENDING: u32 = 1;

@@ -45,6 +45,8 @@ pub(crate) fn add_link(
             next: head,
             flags,
             k_open: 0.0,
+            dir: [0.0; 3],
+            spread: 0.0,
         },
     );
     st.link_k_mut(ws, i).fill(0.0);
@@ -105,6 +107,8 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 o[kk] = co.open;
                 o[kk + 1] = if co.partial { 1.0 } else { 0.0 };
                 o[kk + 2] = co.rays as f32;
+                o[kk + 3..kk + 6].copy_from_slice(&co.dir.to_array());
+                o[kk + 6] = co.spread;
             }
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
@@ -116,6 +120,8 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 let o = &buf[slot * out..(slot + 1) * out];
                 c.st.link_k_mut(c.ws, i as u32).copy_from_slice(&o[..kk]);
                 l.k_open = o[kk];
+                l.dir = [o[kk + 3], o[kk + 4], o[kk + 5]];
+                l.spread = o[kk + 6];
                 l.flags = (l.flags & !PENDING) | if o[kk + 1] != 0.0 { PARTIAL } else { 0 };
                 c.st.set_link(c.ws, i as u32, &l);
                 c.st.stats.evaluations += 1;
@@ -143,8 +149,9 @@ pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progre
     let mut any = false;
     loop {
         st.stats.refinement_passes += 1;
-        let changed = refine_pass(st, ws);
+        let changed = refine_pass(st, ws) | refine_shadows(st, ws);
         progress.report("refining (links)", st.links.live() as u64, 0);
+        super::direct::prepare_pending(st, ws, vis, ex, progress);
         evaluate_pending(st, ws, vis, ex, progress);
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
         if !changed {
@@ -282,14 +289,19 @@ fn subdivide_patch(st: &mut State, ws: &mut [u8], e: Elem, p: &Patch, pool: usiz
             poly: p.poly,
             links: NONE,
             area: shape,
-            shape: n as u32 | ((p.depth() + 1) << 8) | STALE,
+            shape: n as u32 | ((p.depth() + 1) << 8) | STALE | UNPREPARED,
             closure: [1.0; 2],
+            exposed: p.exposed,
+            shadow: 0.0,
         };
         st.set_patch(ws, child, &rec);
         for (side, pb) in parent_b.iter().enumerate().take(sides) {
             let nb = st.bands;
             st.b_mut(ws, child, side).copy_from_slice(&pb[..nb]);
             st.h_mut(ws, child, side).fill(0.0);
+            if let Some(d) = st.direct_mut(ws, child, side) {
+                d.fill(0.0);
+            }
         }
     }
     let mut q = *p;
@@ -320,6 +332,109 @@ fn choose(st: &State, ws: &[u8], recv: Elem, emit: Elem, rs: &Shape, es: &Shape)
         (false, false, true) => Some(false),
         _ => None,
     }
+}
+
+/// Whether and where to refine link `i` (receiver `recv` <- `emit`): `Some(true)` split the
+/// receiver, `Some(false)` the emitter, `None` keep it.
+///
+/// A link whose transfer (emitter radiosity x coefficient x receiving area, the open
+/// coefficient where it is partly hidden) is below `threshold` is kept. Links with a cluster
+/// on either side are refined above it (their isotropic and averaged parts are as wrong as
+/// the transfer is large). Between patches the exact form factor already integrates over the
+/// emitter, so a far link is refined only where constancy is wrong: the coefficient varies
+/// over the receiver (its spread, visibility included), or the emitter's radiosity varies
+/// over the emitter (its children differ) while the receiver sees only part of it; near
+/// links (within twice their sizes) always, as a few quadrature points can miss a peak.
+#[allow(clippy::too_many_arguments)]
+fn decide(
+    st: &mut State,
+    ws: &mut [u8],
+    recv: Elem,
+    emit: Elem,
+    l: &Link,
+    i: u32,
+    rs: &Shape,
+    es: &Shape,
+    threshold: f32,
+) -> Option<bool> {
+    let k: f32 = st.link_k(ws, i).iter().sum();
+    let k_eff = if l.flags & PARTIAL != 0 { l.k_open } else { k };
+    let b = b_max(st, ws, emit);
+    let area = receiving_area(rs);
+    if b * k_eff * area <= threshold {
+        return None;
+    }
+    if !(recv.is_patch() && emit.is_patch()) {
+        return choose(st, ws, recv, emit, rs, es);
+    }
+    // A receiver with buried points is seen only in part: refine it like a shadow edge.
+    let buried = recv.is_patch() && (0..4).any(|q| st.patch(ws, recv).buried(q));
+    // Partly hidden: a few rays per point can miss what shows; the hidden part is uncertain.
+    let hidden = if l.flags & PARTIAL != 0 {
+        (l.k_open - k).max(0.0)
+    } else {
+        0.0
+    };
+    let e_recv = if buried {
+        b * k_eff * area
+    } else {
+        b * (l.spread + hidden) * area
+    };
+    let e_emit = k * b_spread(st, ws, emit) * area;
+    let (rr, re) = (radius(rs), radius(es));
+    let gap =
+        (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit)).length();
+    let near = gap < 2.0 * (rr + re);
+    if !near && e_recv.max(e_emit) <= threshold {
+        return None;
+    }
+    let (can_r, can_e) = (can_split(st, ws, recv), can_split(st, ws, emit));
+    if e_emit > e_recv && can_e {
+        Some(false)
+    } else if near {
+        // Close by, the emitter's radiosity may vary where the receiver sees it most: split
+        // the larger of the two.
+        if (re > rr && can_e) || !can_r {
+            can_e.then_some(false)
+        } else {
+            Some(true)
+        }
+    } else if can_r {
+        Some(true)
+    } else if can_e {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// How much an emitter patch's radiosity varies over its children (W/m^2, the largest band
+/// and side; 0 for a leaf).
+fn b_spread(st: &State, ws: &[u8], e: Elem) -> f32 {
+    let p = st.patch(ws, e);
+    if p.first_child == NONE {
+        return 0.0;
+    }
+    let mut spread = 0.0f32;
+    for side in 0..State::sides(e) {
+        for band in 0..st.bands {
+            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+            for j in 0..4 {
+                let child = Elem::new(e.kind(), p.first_child + j);
+                if st.patch(ws, child).exposed <= 0.0 {
+                    continue;
+                }
+                if let Some(b) = st.b(ws, child, side) {
+                    lo = lo.min(b[band]);
+                    hi = hi.max(b[band]);
+                }
+            }
+            if hi >= lo {
+                spread = spread.max(hi - lo);
+            }
+        }
+    }
+    spread
 }
 
 /// One pass over every receiver's links. Returns true if any link was split.
@@ -359,17 +474,10 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                     continue;
                 }
                 let es = st.shape(ws, emit);
-                let refine = self_link || {
-                    let k: f32 = st.link_k(ws, cur).iter().sum();
-                    let k_eff = if l.flags & PARTIAL != 0 { l.k_open } else { k };
-                    b_max(st, ws, emit) * k_eff * receiving_area(&rs) > threshold
-                };
-                let split = if !refine {
-                    None
-                } else if self_link {
+                let split = if self_link {
                     Some(split_self(st, ws, recv))
                 } else {
-                    choose(st, ws, recv, emit, &rs, &es)
+                    decide(st, ws, recv, emit, &l, cur, &rs, &es, threshold)
                         .map(|on_recv| split_link(st, ws, recv, emit, on_recv))
                 };
                 match split {
@@ -400,6 +508,44 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                     }
                 }
                 cur = next;
+            }
+        }
+    }
+    changed
+}
+
+/// Subdivides every leaf patch across which the direct light of suns varies by more than
+/// epsilon allows (a shadow edge crosses it; see `direct`). Returns true if any was split.
+fn refine_shadows(st: &mut State, ws: &mut [u8]) -> bool {
+    if st.suns == 0 {
+        return false;
+    }
+    let threshold = st.settings.epsilon * st.power;
+    let mut changed = false;
+    for (kind, pool) in [(Kind::Patch1, 0usize), (Kind::Patch2, 1)] {
+        let count = st.patches[pool].len;
+        for i in 0..count {
+            let e = Elem::new(kind, i);
+            let p = st.patch(ws, e);
+            if p.first_child != NONE || p.unprepared() || p.shadow <= threshold {
+                continue;
+            }
+            // Only what the surface reflects or transmits of it shows.
+            let m = st.material(ws, st.polygon(ws, p.poly).material);
+            let albedo = (0..st.bands)
+                .map(|b| (m.rho[0][b] + m.tau[b]).max(m.rho[1][b] + m.tau[b]))
+                .fold(0.0f32, f32::max);
+            if p.shadow * albedo <= threshold || !can_split(st, ws, e) {
+                continue;
+            }
+            if !st.patches[pool].fits(&st.blocks, 4) {
+                st.stats.budget_limited = true;
+                continue;
+            }
+            if subdivide_patch(st, ws, e, &p, pool).is_some() {
+                changed = true;
+            } else {
+                st.stats.budget_limited = true;
             }
         }
     }

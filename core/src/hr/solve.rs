@@ -2,11 +2,12 @@
 //!
 //! * gather: each receiver sums, over the links it receives, coefficient x emitter radiosity
 //!   (in chunks that any number of threads may compute);
-//! * push: irradiance flows down: a cluster's flux density passes to child clusters and,
-//!   spread isotropically, a quarter of it to each side of child patches; a patch's
-//!   irradiance passes to its sub-patches;
-//! * pull: leaf radiosities come from the materials (`B = E + rho H + tau H_other`), parents
-//!   take area-weighted means, clusters the power of their surfaces over their area.
+//!   a link received by a cluster gives each polygon below it its share by the polygon's own
+//!   cosine (see `oriented`);
+//! * push: a patch's gathered irradiance passes to its sub-patches;
+//! * pull: leaf radiosities come from the materials (`B = E + rho H + tau H_other`, H with
+//!   the direct light of suns and sky), parents take means weighted by exposed area,
+//!   clusters the power of their surfaces over their area.
 //!
 //! Convergence is judged by the estimated remaining change (last change x q / (1 - q), with q
 //! the ratio of successive changes), so a closed scene with rho = 0.99 is not stopped early.
@@ -33,7 +34,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     let mut iterations = 0;
     st.stats.iteration_capped = false;
     for it in 0..st.settings.max_iterations.max(1) {
-        gather(st, ws, ex);
+        gather(st, ws, ex, false);
         push(st, ws);
         let (change, b_max) = pull(st, ws);
         iterations = it + 1;
@@ -59,9 +60,21 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     iterations
 }
 
-/// Every receiver's gathered irradiance.
-fn gather<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) {
-    let n = st.receiver_count() as usize;
+/// Every patch's gathered irradiance, and what the links received by clusters bring their
+/// polygons (see `oriented`).
+///
+/// With `unit`, every emitting side counts as radiosity 1: what each leaf then receives is
+/// the sum of its coefficients (see `closure`).
+pub(crate) fn gather<E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    ex: &mut Fallback<'_, E>,
+    unit: bool,
+) {
+    super::oriented::link_fluxes(st, ws, ex, unit);
+    super::oriented::distribute(st, ws, ex);
+    let first = st.clusters as usize;
+    let n = st.receiver_count() as usize - first;
     let nb = st.bands;
     let out = st.lay.strides.gather_out();
     let kk = st.lay.strides.link_k;
@@ -73,25 +86,40 @@ fn gather<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) 
         CHUNK * out,
         |c: &Ctx<'_>, chunk, buf| {
             buf.fill(0.0);
+            let mut b = [0.0f32; 8];
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                let recv = c.st.receiver(i as u64);
+                let recv = c.st.receiver((first + i) as u64);
+                let at = super::oriented::centre(c.st, c.ws, recv);
                 let h = &mut buf[slot * out..(slot + 1) * out];
                 let mut cur = c.st.links_head(c.ws, recv);
                 while cur != NONE {
                     let l = c.st.link(c.ws, cur);
                     let k = c.st.link_k(c.ws, cur);
                     let emit = Elem(l.emit);
-                    if l.recv != l.emit {
-                        for s in 0..kk.min(2) {
-                            let Some(b) = c.st.b(c.ws, emit, s) else {
-                                continue;
-                            };
-                            for r in 0..if kk == 1 { 1 } else { 2 } {
-                                let coef = if kk == 1 { k[0] } else { k[r * 2 + s] };
-                                if coef != 0.0 {
-                                    for (hb, bb) in h[r * nb..(r + 1) * nb].iter_mut().zip(b) {
-                                        *hb += coef * bb;
-                                    }
+                    for s in 0..kk.min(2) {
+                        let any = if kk == 1 {
+                            k[0] != 0.0
+                        } else {
+                            k[s] != 0.0 || k[2 + s] != 0.0
+                        };
+                        if !any
+                            || !super::oriented::radiosity_towards(
+                                c.st,
+                                c.ws,
+                                emit,
+                                s,
+                                at,
+                                unit,
+                                &mut b[..nb],
+                            )
+                        {
+                            continue;
+                        }
+                        for r in 0..if kk == 1 { 1 } else { 2 } {
+                            let coef = if kk == 1 { k[0] } else { k[r * 2 + s] };
+                            if coef != 0.0 {
+                                for (hb, bb) in h[r * nb..(r + 1) * nb].iter_mut().zip(&b[..nb]) {
+                                    *hb += coef * bb;
                                 }
                             }
                         }
@@ -102,7 +130,7 @@ fn gather<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) 
         },
         |c: &mut Ctx<'_>, chunk, buf| {
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                let recv = c.st.receiver(i as u64);
+                let recv = c.st.receiver((first + i) as u64);
                 for side in 0..State::sides(recv) {
                     let src = &buf[slot * out + side * nb..slot * out + (side + 1) * nb];
                     c.st.h_mut(c.ws, recv, side).copy_from_slice(src);
@@ -113,24 +141,16 @@ fn gather<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) 
     );
 }
 
-/// Irradiance down the hierarchy (parents are numbered before their children).
-fn push(st: &State, ws: &mut [u8]) {
+/// Gathered irradiance down each polygon's quadtree (parents are numbered before their
+/// children). What clusters receive reaches polygons through `oriented::distribute`.
+pub(crate) fn push(st: &State, ws: &mut [u8]) {
     let nb = st.bands;
     let mut tmp = [0.0f32; 8];
-    for i in 1..st.clusters {
-        let e = Elem::new(Kind::Cluster, i);
-        let parent = st.cluster(ws, i).parent;
-        tmp[..nb].copy_from_slice(st.h(ws, Elem::new(Kind::Cluster, parent), 0));
-        for (h, p) in st.h_mut(ws, e, 0).iter_mut().zip(&tmp[..nb]) {
-            *h += p;
-        }
-    }
     for kind in [Kind::Patch1, Kind::Patch2] {
         let len = st.pool(kind).len;
         for i in 0..len {
             let e = Elem::new(kind, i);
             let parent = Elem(st.patch(ws, e).parent);
-            // A polygon's cluster part is added at the leaves (see `leaf_irradiance`).
             if parent.kind() == Kind::Cluster {
                 continue;
             }
@@ -145,15 +165,17 @@ fn push(st: &State, ws: &mut [u8]) {
 }
 
 /// Radiosity up the hierarchy; returns the largest change of a leaf radiosity and the
-/// largest radiosity (W/m^2).
-fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
+/// largest radiosity (W/m^2). Parents take the mean of their children weighted by exposed
+/// area (buried parts are seen by nothing); polygons record their power for `oriented`;
+/// clusters take the power of their surfaces over their area.
+pub(crate) fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
     let nb = st.bands;
     let (mut change, mut b_max) = (0.0f32, 0.0f32);
     for kind in [Kind::Patch2, Kind::Patch1] {
         let len = st.pool(kind).len;
         for i in (0..len).rev() {
             let e = Elem::new(kind, i);
-            let p = st.patch(ws, e);
+            let mut p = st.patch(ws, e);
             let sides = State::sides(e);
             let mut new = [[0.0f32; 8]; 2];
             if p.first_child == NONE {
@@ -170,24 +192,42 @@ fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
                     }
                 }
             } else {
-                let mut area = 0.0f32;
+                let (mut area, mut seen) = (0.0f32, 0.0f32);
+                let mut plain = [[0.0f32; 8]; 2];
                 for j in 0..4 {
                     let child = Elem::new(kind, p.first_child + j);
-                    let a = st.patch(ws, child).area;
+                    let cp = st.patch(ws, child);
+                    let (a, w) = (cp.area, cp.area * cp.exposed);
                     area += a;
-                    for (side, ns) in new.iter_mut().enumerate().take(sides) {
+                    seen += w;
+                    for side in 0..sides {
                         if let Some(b) = st.b(ws, child, side) {
-                            for (n, v) in ns.iter_mut().zip(b) {
-                                *n += a * v;
+                            for k in 0..nb {
+                                new[side][k] += w * b[k];
+                                plain[side][k] += a * b[k];
                             }
                         }
                     }
                 }
-                let inv = if area > 0.0 { 1.0 / area } else { 0.0 };
-                for ns in new.iter_mut().take(sides) {
+                // Wholly buried: nobody sees it, keep the plain mean.
+                let (weights, total) = if seen > 0.0 {
+                    (&mut new, seen)
+                } else {
+                    (&mut plain, area)
+                };
+                let inv = if total > 0.0 { 1.0 / total } else { 0.0 };
+                for ns in weights.iter_mut().take(sides) {
                     for n in ns[..nb].iter_mut() {
                         *n *= inv;
                     }
+                }
+                if seen <= 0.0 {
+                    new = plain;
+                }
+                let exposed = if area > 0.0 { seen / area } else { 0.0 };
+                if exposed != p.exposed {
+                    p.exposed = exposed;
+                    st.set_patch(ws, e, &p);
                 }
             }
             for (side, ns) in new.iter().enumerate().take(sides) {
@@ -200,6 +240,15 @@ fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
                     *old = *n;
                 }
             }
+            if Elem(p.parent).kind() == Kind::Cluster {
+                let w = p.area * p.exposed;
+                for side in 0..2 {
+                    let dst = st.polygon_power_mut(ws, p.poly, side);
+                    for (d, n) in dst.iter_mut().zip(&new[side.min(sides - 1)][..nb]) {
+                        *d = if side < sides { w * n } else { 0.0 };
+                    }
+                }
+            }
         }
     }
     for i in (0..st.clusters).rev() {
@@ -207,11 +256,18 @@ fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
         let mut power = [0.0f32; 8];
         for k in 0..c.child_count {
             let child = st.child(ws, c.children + k);
-            let area = super::sample::area(st, ws, child);
-            for side in 0..State::sides(child) {
-                if let Some(b) = st.b(ws, child, side) {
+            if child.kind() == Kind::Cluster {
+                let cc = st.cluster(ws, child.index());
+                if let Some(b) = st.b(ws, child, 0) {
                     for (p, v) in power.iter_mut().zip(b) {
-                        *p += area * v;
+                        *p += cc.area * v;
+                    }
+                }
+            } else {
+                let poly = st.patch(ws, child).poly;
+                for side in 0..2 {
+                    for (p, v) in power.iter_mut().zip(st.polygon_power(ws, poly, side)) {
+                        *p += v;
                     }
                 }
             }
@@ -223,4 +279,18 @@ fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
         }
     }
     (change, b_max)
+}
+
+/// The power leaving all surfaces (W, the largest band): epsilon's unit.
+pub(crate) fn flow(st: &State, ws: &[u8]) -> f32 {
+    let nb = st.bands;
+    let mut total = [0.0f64; 8];
+    for i in 0..st.polygons {
+        for side in 0..2 {
+            for (t, v) in total.iter_mut().zip(st.polygon_power(ws, i, side)) {
+                *t += *v as f64;
+            }
+        }
+    }
+    total[..nb].iter().copied().fold(0.0, f64::max) as f32
 }

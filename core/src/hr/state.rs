@@ -26,8 +26,16 @@ pub(crate) struct State {
     pub polygons: u32,
     /// Entries of the child-list array used so far.
     pub child_entries: u32,
-    /// Largest radiosity-weighted emitted power in any band (W): epsilon's unit.
+    /// Epsilon's unit (W): the power leaving all surfaces (emitted and reflected, the
+    /// largest band), as of the last solution; before the first, what they emit and reflect
+    /// of the direct light.
     pub power: f32,
+    /// Suns (the first sources) and all sources (suns, then sky directions).
+    pub suns: u32,
+    pub sources: u32,
+    /// Geometric mean of the input polygons' areas (m^2): the scale of the shadows polygons
+    /// cast, for sampling direct light.
+    pub typical_area: f32,
     /// Minimum patch area (m^2).
     pub min_area: f32,
     /// Length beyond which a ray towards a directional source has left the scene (m).
@@ -90,8 +98,9 @@ impl State {
     }
 
     /// Radiosity of side `side` (W/m^2 per band); sources give their irradiance, clusters
-    /// their mean radiosity (power over one-sided area). A side an element does not keep
-    /// is `None` (it emits nothing).
+    /// their mean radiosity (power over one-sided area; what they emit towards a given
+    /// direction is [`super::emission`]). A side an element does not keep is `None` (it
+    /// emits nothing).
     pub(crate) fn b<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
         if side >= Self::sides(e) {
             return None;
@@ -106,8 +115,9 @@ impl State {
         floats_mut(ws, at, nb)
     }
 
-    /// Irradiance of side `side` (W/m^2 per band; for clusters the flux density on a plane
-    /// facing the light). Sources keep none.
+    /// Gathered irradiance of a patch's side `side` (W/m^2 per band): what its own links and
+    /// its ancestor patches' links bring (before the closure factor). Clusters and sources
+    /// keep none.
     pub(crate) fn h<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> &'a [f32] {
         let nb = self.bands;
         let sides = Self::sides(e);
@@ -123,6 +133,100 @@ impl State {
         let sides = Self::sides(e);
         let at = self.values_at(ws, e) + 4 * nb * (sides + side.min(sides - 1));
         floats_mut(ws, at, nb)
+    }
+
+    /// Direct irradiance of a patch's side from suns and sky (W/m^2 per band), or `None`
+    /// when the scene has no directional sources.
+    pub(crate) fn direct<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
+        if !self.lay.strides.direct {
+            return None;
+        }
+        let nb = self.bands;
+        let sides = Self::sides(e);
+        Some(floats(
+            ws,
+            self.values_at(ws, e) + 4 * nb * (2 * sides + side.min(sides - 1)),
+            nb,
+        ))
+    }
+
+    pub(crate) fn direct_mut<'a>(
+        &self,
+        ws: &'a mut [u8],
+        e: Elem,
+        side: usize,
+    ) -> Option<&'a mut [f32]> {
+        if !self.lay.strides.direct {
+            return None;
+        }
+        let nb = self.bands;
+        let sides = Self::sides(e);
+        let at = self.values_at(ws, e) + 4 * nb * (2 * sides + side.min(sides - 1));
+        Some(floats_mut(ws, at, nb))
+    }
+
+    /// Byte offset of polygon `i`'s record.
+    fn polygon_at(&self, i: u32) -> usize {
+        self.lay.polygons + i as usize * self.lay.strides.polygon
+    }
+
+    /// Irradiance of polygon `i`'s side from the links its clusters receive (W/m^2 per band).
+    pub(crate) fn polygon_h<'a>(&self, ws: &'a [u8], i: u32, side: usize) -> &'a [f32] {
+        let nb = self.bands;
+        let at = self.polygon_at(i) + core::mem::size_of::<Polygon>() + 4 * nb * side.min(1);
+        floats(ws, at, nb)
+    }
+
+    pub(crate) fn polygon_h_mut<'a>(&self, ws: &'a mut [u8], i: u32, side: usize) -> &'a mut [f32] {
+        let nb = self.bands;
+        let at = self.polygon_at(i) + core::mem::size_of::<Polygon>() + 4 * nb * side.min(1);
+        floats_mut(ws, at, nb)
+    }
+
+    /// Polygon `i`'s side radiosity times its exposed area (W per band), as of the last pull.
+    pub(crate) fn polygon_power<'a>(&self, ws: &'a [u8], i: u32, side: usize) -> &'a [f32] {
+        let nb = self.bands;
+        let at = self.polygon_at(i) + core::mem::size_of::<Polygon>() + 4 * nb * (2 + side.min(1));
+        floats(ws, at, nb)
+    }
+
+    pub(crate) fn polygon_power_mut<'a>(
+        &self,
+        ws: &'a mut [u8],
+        i: u32,
+        side: usize,
+    ) -> &'a mut [f32] {
+        let nb = self.bands;
+        let at = self.polygon_at(i) + core::mem::size_of::<Polygon>() + 4 * nb * (2 + side.min(1));
+        floats_mut(ws, at, nb)
+    }
+
+    pub(crate) fn set_polygon(&self, ws: &mut [u8], i: u32, p: &Polygon) {
+        write(ws, self.polygon_at(i), p)
+    }
+
+    /// The `k`-th polygon in cluster order (a cluster's polygons are consecutive).
+    pub(crate) fn ordered(&self, ws: &[u8], k: u32) -> u32 {
+        read(ws, self.lay.order + 4 * k as usize)
+    }
+
+    pub(crate) fn set_ordered(&self, ws: &mut [u8], k: u32, poly: u32) {
+        write(ws, self.lay.order + 4 * k as usize, &poly)
+    }
+
+    /// A link's current flux density per band (see [`Link`]).
+    pub(crate) fn link_flux<'a>(&self, ws: &'a [u8], i: u32) -> &'a [f32] {
+        let at = self.links.at(ws, &self.blocks, i)
+            + core::mem::size_of::<Link>()
+            + 4 * self.lay.strides.link_k;
+        floats(ws, at, self.bands)
+    }
+
+    pub(crate) fn link_flux_mut<'a>(&self, ws: &'a mut [u8], i: u32) -> &'a mut [f32] {
+        let at = self.links.at(ws, &self.blocks, i)
+            + core::mem::size_of::<Link>()
+            + 4 * self.lay.strides.link_k;
+        floats_mut(ws, at, self.bands)
     }
 
     pub(crate) fn patch(&self, ws: &[u8], e: Elem) -> Patch {
@@ -150,10 +254,7 @@ impl State {
     }
 
     pub(crate) fn polygon(&self, ws: &[u8], i: u32) -> Polygon {
-        read(
-            ws,
-            self.lay.polygons + i as usize * core::mem::size_of::<Polygon>(),
-        )
+        read(ws, self.polygon_at(i))
     }
 
     pub(crate) fn material(&self, ws: &[u8], i: u32) -> Material {

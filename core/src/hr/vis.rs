@@ -55,4 +55,11 @@ impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
             }
         }
     }
+
+    fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
+        match self.vis {
+            Vis::External(v) => v.first_hit(from, to, skip),
+            Vis::Internal(bvh) => BvhVisibility::new(*bvh, self.polys).first_hit(from, to, skip),
+        }
+    }
 }

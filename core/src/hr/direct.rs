@@ -1,0 +1,515 @@
+//! What every new patch learns once, from rays, before any link is evaluated on it: which of
+//! its quadrature points are buried inside closed objects, and the direct light of suns and
+//! sky on each side.
+//!
+//! * **Buried points.** A point whose rays all meet the back of one-sided polygons lies
+//!   inside a closed object (a floor under a box, a ceiling behind a lamp): it sees nothing
+//!   and nothing sees it. Such points are left out of the patch's irradiance and the patch
+//!   counts only its exposed area when its parent averages radiosity, so a floor patch that
+//!   straddles a box's footprint gives the box's faces the radiosity of the part they see.
+//! * **Direct light** does not go through links: every patch integrates its own visibility
+//!   of each sun over its area, on a stratified grid whose cells are about the size of the
+//!   scene's typical polygon (the shadows that cross it are cast by polygons), refined
+//!   adaptively where the samples of a cell disagree (a shadow edge crosses it). Sky
+//!   directions, each weak, are sampled jointly: every sample takes one direction by
+//!   importance (irradiance times cosine), stratified over the patch. The measure of how
+//!   unevenly a patch is lit drives its subdivision at shadow edges (see `refine`).
+//!
+//! Every sample comes from a hash of the patch and the sample number, so results never
+//! depend on the thread count.
+
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::ids::{Elem, Kind};
+use super::layout::CHUNK;
+use super::records::*;
+use super::state::State;
+use super::vis::{Ray, Vis, WsPolygons};
+use crate::limits::NONE;
+use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// Rays per quadrature point for the buried test (stops at the first that proves the point
+/// exposed).
+const BURIED_RAYS: u32 = 8;
+/// Extra levels of adaptive subdivision of a grid cell for a sun.
+const SUN_DEPTH: u32 = 3;
+/// Most grid cells along a side of a patch.
+const MAX_CELLS: u32 = 8;
+
+/// Computes exposure and direct light for every unprepared patch.
+pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+) {
+    let nb = st.bands;
+    let out = st.lay.strides.prepare_out();
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        let n = st.pool(kind).len as usize;
+        let mut ctx = Ctx {
+            st: &mut *st,
+            ws: &mut *ws,
+            vis,
+        };
+        run_chunks(
+            ex,
+            &mut ctx,
+            n.div_ceil(CHUNK),
+            CHUNK * out,
+            |c: &Ctx<'_, '_, V>, chunk, buf| {
+                let ray = Ray {
+                    vis: c.vis,
+                    polys: WsPolygons { st: c.st, ws: c.ws },
+                };
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let o = &mut buf[slot * out..(slot + 1) * out];
+                    let e = Elem::new(kind, i as u32);
+                    let p = c.st.patch(c.ws, e);
+                    if !p.unprepared() {
+                        o[0] = f32::NAN;
+                        continue;
+                    }
+                    prepare(c.st, c.ws, e, &p, &ray, o);
+                }
+            },
+            |c: &mut Ctx<'_, '_, V>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let o = &buf[slot * out..(slot + 1) * out];
+                    if o[0].is_nan() {
+                        continue;
+                    }
+                    let e = Elem::new(kind, i as u32);
+                    let mut p = c.st.patch(c.ws, e);
+                    let bits = o[0] as u32;
+                    p.shape = (p.shape & !(UNPREPARED | (0xF * BURIED) | (3 * CLOSED)))
+                        | ((bits & 0xF) * BURIED)
+                        | ((bits >> 4) * CLOSED);
+                    p.exposed = o[1];
+                    p.shadow = o[2];
+                    c.st.set_patch(c.ws, e, &p);
+                    c.st.stats.rays += o[3 + 2 * nb] as u64;
+                    for side in 0..State::sides(e) {
+                        if let Some(d) = c.st.direct_mut(c.ws, e, side) {
+                            d.copy_from_slice(&o[3 + side * nb..3 + (side + 1) * nb]);
+                        }
+                    }
+                }
+            },
+            &mut |done, total| {
+                progress.report(
+                    "lighting patches",
+                    (done * CHUNK).min(n) as u64,
+                    (total * CHUNK).min(n) as u64,
+                )
+            },
+        );
+    }
+}
+
+struct Ctx<'a, 'v, V: ?Sized> {
+    st: &'a mut State,
+    ws: &'a mut [u8],
+    vis: &'a Vis<'v, V>,
+}
+
+/// Fills `out`: buried bits, exposed fraction, shadow measure, direct irradiance per side
+/// and band, rays cast.
+fn prepare<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    p: &Patch,
+    vis: &V,
+    out: &mut [f32],
+) {
+    let nb = st.bands;
+    out.fill(0.0);
+    let poly = st.polygon(ws, p.poly);
+    let normal = Vec3::from(poly.normal);
+    let n = p.corner_count();
+    let mut corners = [Vec3::ZERO; 4];
+    for (c, src) in corners.iter_mut().zip(p.corners) {
+        *c = src.into();
+    }
+    let corners = &corners[..n];
+    let mut rays = 0u32;
+    // Buried quadrature points (one-sided polygons only: a two-sided one is never inside).
+    let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+    let m = quadrature(corners, &mut pts, &mut wts);
+    let mut bits = 0u32;
+    let mut exposed = 0.0f32;
+    for q in 0..m {
+        let buried = e.kind() == Kind::Patch1
+            && is_buried(
+                st,
+                ws,
+                pts[q],
+                normal,
+                p.poly,
+                hash3(e.0, q as u32, 0xB0),
+                vis,
+                &mut rays,
+            );
+        if buried {
+            bits |= 1 << q;
+        } else {
+            exposed += wts[q];
+        }
+    }
+    // Closed sides: no ray from any quadrature point leaves the scene.
+    for side in 0..State::sides(e) {
+        let n = if side == 0 { normal } else { -normal };
+        let seed = hash3(e.0, side as u32, 0xC105);
+        if is_closed(st, &pts[..m], n, p.poly, seed, vis, &mut rays) {
+            bits |= 1 << (4 + side);
+        }
+    }
+    out[0] = bits as f32;
+    out[1] = exposed.clamp(0.0, 1.0);
+    let sources = st.sources;
+    if sources > 0 && st.lay.strides.direct {
+        let sides = State::sides(e);
+        let mut direct = [[0.0f32; 8]; 2];
+        let cells = cells_for(st, p.area);
+        let mut shadow = 0.0f32;
+        // Suns: adaptive visibility per sun.
+        for k in 0..st.suns {
+            let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, k)));
+            let towards = Vec3::from(src.towards);
+            let c = normal.dot(towards);
+            let side = if c > 0.0 { 0 } else { 1 };
+            if c == 0.0 || side >= sides {
+                continue;
+            }
+            let seed = hash3(e.0, k, 0x5A11);
+            let lit = lit_fraction(
+                corners, cells, seed, p.poly, towards, st.far, vis, &mut rays,
+            );
+            let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
+            let mut e_max = 0.0f32;
+            for (b, d) in direct[side][..nb].iter_mut().enumerate() {
+                let v = irr.get(b).copied().unwrap_or(0.0) * c.abs();
+                *d += v * lit;
+                e_max = e_max.max(v);
+            }
+            shadow += e_max * p.area * 2.0 * lit.min(1.0 - lit);
+        }
+        // Sky: one importance-sampled direction per sample.
+        let sky = sky_samples(cells, st.settings.rays);
+        sky_light(
+            st,
+            ws,
+            e,
+            p,
+            corners,
+            normal,
+            sides,
+            sky,
+            vis,
+            &mut direct,
+            &mut rays,
+        );
+        // The patch's irradiance is the mean over its exposed part; buried parts are dark.
+        let scale = if out[1] > 0.0 { 1.0 / out[1] } else { 0.0 };
+        for side in 0..sides {
+            for b in 0..nb {
+                out[3 + side * nb + b] = direct[side][b] * scale.min(1e6);
+            }
+        }
+        out[2] = shadow;
+    }
+    out[3 + 2 * nb] = rays as f32;
+}
+
+/// Cells along each side of a patch's sampling grid: about one per typical polygon of the
+/// scene along its side, at least 1, at most [`MAX_CELLS`].
+fn cells_for(st: &State, area: f32) -> u32 {
+    if st.typical_area.is_nan() || st.typical_area <= 0.0 || area.is_nan() || area <= 0.0 {
+        return 1;
+    }
+    let r = libm::sqrtf(area / st.typical_area);
+    (libm::ceilf(r) as u32).clamp(1, MAX_CELLS)
+}
+
+/// Sky samples for a grid: `rays` per cell, at least 16.
+fn sky_samples(cells: u32, rays: u32) -> u32 {
+    (cells * cells * rays.max(1)).max(16)
+}
+
+/// True when every ray from `x` (on polygon `poly`, front normal `n`) meets the back of a
+/// one-sided polygon.
+#[allow(clippy::too_many_arguments)]
+fn is_buried<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    x: Vec3,
+    n: Vec3,
+    poly: u32,
+    seed: u32,
+    vis: &V,
+    rays: &mut u32,
+) -> bool {
+    for j in 0..BURIED_RAYS {
+        // The normal first, then cosine-distributed directions, stratified.
+        let d = if j == 0 {
+            n
+        } else {
+            let (u, v) = unit2(hash3(seed, j, 0xD1));
+            let strata = BURIED_RAYS - 1;
+            let u = ((j - 1) as f32 + u) / strata as f32;
+            cosine_direction(n, u, v)
+        };
+        *rays += 1;
+        let Some((hit, _)) = vis.first_hit(x, x + d * st.far, [poly, NONE]) else {
+            return false;
+        };
+        if hit >= st.polygons {
+            return false;
+        }
+        let hp = st.polygon(ws, hit);
+        let m = st.material(ws, hp.material);
+        let back = Vec3::from(hp.normal).dot(d) > 0.0;
+        if m.two_sided != 0 || !back {
+            return false;
+        }
+    }
+    true
+}
+
+/// True when no ray from the points, in 4 stratified cosine-distributed directions each
+/// about `n`, leaves the scene.
+fn is_closed<V: Visibility + ?Sized>(
+    st: &State,
+    points: &[Vec3],
+    n: Vec3,
+    poly: u32,
+    seed: u32,
+    vis: &V,
+    rays: &mut u32,
+) -> bool {
+    for (q, &x) in points.iter().enumerate() {
+        for j in 0..4u32 {
+            let (u, v) = unit2(hash3(seed, q as u32 * 4 + j, 0xE5C));
+            let u = ((j % 2) as f32 + u) * 0.5;
+            let v = ((j / 2) as f32 + v) * 0.5;
+            let d = cosine_direction(n, u, v);
+            *rays += 1;
+            if vis.first_hit(x, x + d * st.far, [poly, NONE]).is_none() {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// A cosine-distributed unit direction about `n` from `u, v` in [0, 1).
+pub(crate) fn cosine_direction(n: Vec3, u: f32, v: f32) -> Vec3 {
+    let (t, b) = n.any_orthonormal_pair();
+    let r = libm::sqrtf(u);
+    let phi = 2.0 * core::f32::consts::PI * v;
+    let z = libm::sqrtf((1.0 - u).max(0.0));
+    (t * (r * libm::cosf(phi)) + b * (r * libm::sinf(phi)) + n * z).normalize_or_zero()
+}
+
+/// Area weight of the sample at `(u, v)`: the Jacobian of the bilinear map on a quad (1 on a
+/// triangle, whose map preserves area).
+fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
+    if corners.len() != 4 {
+        return 1.0;
+    }
+    let (a, b, c, d) = (corners[0], corners[1], corners[2], corners[3]);
+    let du = (b - a) * (1.0 - v) + (c - d) * v;
+    let dv = (d - a) * (1.0 - u) + (c - b) * u;
+    du.cross(dv).length()
+}
+
+/// The lit fraction of a patch towards a directional source: a `cells x cells` grid, 2 x 2
+/// jittered samples per cell, cells whose samples disagree split again (up to
+/// [`SUN_DEPTH`] levels), every sample weighted by its share of the area.
+#[allow(clippy::too_many_arguments)]
+fn lit_fraction<V: Visibility + ?Sized>(
+    corners: &[Vec3],
+    cells: u32,
+    seed: u32,
+    poly: u32,
+    towards: Vec3,
+    far: f32,
+    vis: &V,
+    rays: &mut u32,
+) -> f32 {
+    let (mut lit, mut total) = (0.0f32, 0.0f32);
+    // (u0, v0, size, depth) of cells still to sample.
+    let mut stack: heapless::Vec<(f32, f32, f32, u32), 64> = heapless::Vec::new();
+    let size = 1.0 / cells as f32;
+    let mut next_cell = 0u32;
+    let mut id = 0u32;
+    while let Some((u0, v0, s, depth)) = stack.pop().or_else(|| {
+        if next_cell < cells * cells {
+            let (i, j) = (next_cell % cells, next_cell / cells);
+            next_cell += 1;
+            Some((i as f32 * size, j as f32 * size, size, 0))
+        } else {
+            None
+        }
+    }) {
+        let mut vals = [0.0f32; 4];
+        let mut wts = [0.0f32; 4];
+        let half = 0.5 * s;
+        for (k, (v, w)) in vals.iter_mut().zip(wts.iter_mut()).enumerate() {
+            id += 1;
+            let (ju, jv) = unit2(hash3(seed, id, 0x7E));
+            let u = u0 + ((k % 2) as f32 + ju) * half;
+            let vv = v0 + ((k / 2) as f32 + jv) * half;
+            let x = point_on(corners, u, vv);
+            *rays += 1;
+            *v = vis.transmittance(x, x + towards * far, [poly, NONE]);
+            *w = jacobian(corners, u, vv);
+        }
+        let mixed = vals.iter().any(|&v| v != vals[0]);
+        if mixed && depth < SUN_DEPTH && stack.capacity() - stack.len() >= 4 {
+            for k in 0..4 {
+                let _ = stack.push((
+                    u0 + (k % 2) as f32 * half,
+                    v0 + (k / 2) as f32 * half,
+                    half,
+                    depth + 1,
+                ));
+            }
+            continue;
+        }
+        // A cell's area share is its parameter area times the mean Jacobian of its samples.
+        let area = s * s;
+        for k in 0..4 {
+            lit += area * wts[k] * vals[k];
+            total += area * wts[k];
+        }
+    }
+    if total > 0.0 {
+        (lit / total).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// Adds the sky's direct light to `direct` (per side and band): `count` samples, each at a
+/// stratified point of the patch with a direction drawn by irradiance x |cosine| (front
+/// directions for one-sided patches).
+#[allow(clippy::too_many_arguments)]
+fn sky_light<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    p: &Patch,
+    corners: &[Vec3],
+    normal: Vec3,
+    sides: usize,
+    count: u32,
+    vis: &V,
+    direct: &mut [[f32; 8]; 2],
+    rays: &mut u32,
+) {
+    let nb = st.bands;
+    let first = st.suns;
+    let total_sources = st.sources;
+    if total_sources <= first {
+        return;
+    }
+    // Weights: the largest band's irradiance times |cosine|, on the sides the patch has.
+    let weight = |k: u32| -> (f32, usize, f32) {
+        let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, k)));
+        let c = normal.dot(Vec3::from(src.towards));
+        let side = if c > 0.0 { 0 } else { 1 };
+        if c == 0.0 || side >= sides {
+            return (0.0, side, c);
+        }
+        let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
+        let e_max = irr.iter().copied().fold(0.0f32, f32::max);
+        (e_max * c.abs(), side, c)
+    };
+    let mut w_total = 0.0f32;
+    for k in first..total_sources {
+        w_total += weight(k).0;
+    }
+    if w_total.is_nan() || w_total <= 0.0 {
+        return;
+    }
+    let grid = libm::floorf(libm::sqrtf(count as f32)).max(1.0) as u32;
+    let seed = hash3(e.0, 0x5C1, p.poly);
+    let inv = w_total / count as f32;
+    // Directions are stratified over the weights' CDF in sample order; points over a grid
+    // in a shuffled order (a stride coprime with the count), so the two do not align.
+    let stride = coprime_stride(count, hash3(seed, 0, 0xC3));
+    for j in 0..count {
+        let cell = ((j as u64 * stride as u64) % count as u64) as u32 % (grid * grid);
+        let (ju, jv) = unit2(hash3(seed, j, 0xA1));
+        let u = ((cell % grid) as f32 + ju) / grid as f32;
+        let v = ((cell / grid) as f32 + jv) / grid as f32;
+        let (jt, _) = unit2(hash3(seed, j, 0xE5));
+        let target = (j as f32 + jt) / count as f32 * w_total;
+        let mut acc = 0.0f32;
+        let mut pick = NONE;
+        for k in first..total_sources {
+            let w = weight(k).0;
+            if w <= 0.0 {
+                continue;
+            }
+            acc += w;
+            pick = k;
+            if target < acc {
+                break;
+            }
+        }
+        if pick == NONE {
+            continue;
+        }
+        let (w, side, c) = weight(pick);
+        if w <= 0.0 {
+            continue;
+        }
+        let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, pick)));
+        let x = point_on(corners, u, v);
+        *rays += 1;
+        let t = vis.transmittance(x, x + Vec3::from(src.towards) * st.far, [p.poly, NONE]);
+        if t <= 0.0 {
+            continue;
+        }
+        let jw = jacobian(corners, u, v) / mean_jacobian(corners);
+        let irr = st.b(ws, Elem::new(Kind::Source, pick), 0).unwrap_or(&[]);
+        for (b, d) in direct[side][..nb].iter_mut().enumerate() {
+            let e_b = irr.get(b).copied().unwrap_or(0.0) * c.abs();
+            *d += inv * jw * t * e_b / w;
+        }
+    }
+}
+
+/// A stride in `count / 2 .. count` coprime with `count` (1 for small counts), chosen from
+/// `h`: walking `j * stride mod count` visits every index once.
+fn coprime_stride(count: u32, h: u32) -> u32 {
+    if count <= 2 {
+        return 1;
+    }
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut s = count / 2 + h % (count / 2).max(1);
+    while gcd(s, count) != 1 {
+        s += 1;
+        if s >= count {
+            s = 1;
+        }
+    }
+    s
+}
+
+/// The mean of [`jacobian`] over the unit square (exact for a bilinear quad: its value at the
+/// centre).
+fn mean_jacobian(corners: &[Vec3]) -> f32 {
+    let j = jacobian(corners, 0.5, 0.5);
+    if j > 0.0 { j } else { 1.0 }
+}
