@@ -59,13 +59,16 @@ pub(crate) fn update<E: Executor>(
                 for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                     let e = Elem::new(kind, i as u32);
                     let p = c.st.patch(c.ws, e);
-                    let mut f = [1.0f32; 2];
+                    // Stored as the factor's departure from 1, which f32 holds far more
+                    // finely than the factor itself (with rho = 0.9999 a rounding of 6e-8
+                    // would be amplified 10,000 times).
+                    let mut f = [0.0f32; 2];
                     if p.first_child == NONE {
                         for (side, fs) in f.iter_mut().enumerate().take(State::sides(e)) {
-                            let sum =
-                                c.st.h(c.ws, e, side)[0] + c.st.polygon_h(c.ws, p.poly, side)[0];
+                            let sum = c.st.h(c.ws, e, side)[0] as f64
+                                + c.st.polygon_h(c.ws, p.poly, side)[0] as f64;
                             if sum > 0.0 && sum.is_finite() {
-                                *fs = 1.0 / sum;
+                                *fs = ((1.0 - sum) / sum) as f32;
                             }
                         }
                     }
@@ -106,7 +109,7 @@ pub(crate) fn leaf_irradiance(st: &State, ws: &[u8], e: Elem, side: usize, out: 
         .zip(st.h(ws, e, side))
         .zip(st.polygon_h(ws, p.poly, side))
     {
-        *o = c * (h + hc);
+        *o = ((1.0 + c as f64) * (*h as f64 + *hc as f64)) as f32;
     }
     if let Some(d) = st.direct(ws, e, side) {
         for (o, v) in out.iter_mut().zip(d) {

@@ -84,9 +84,11 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
                     let e = Elem::new(kind, i as u32);
                     let mut p = c.st.patch(c.ws, e);
                     let bits = o[0] as u32;
-                    p.shape = (p.shape & !(UNPREPARED | (0xF * BURIED) | (3 * CLOSED)))
+                    p.shape = (p.shape
+                        & !(UNPREPARED | (0xF * BURIED) | (3 * CLOSED) | SEES_BACKS))
                         | ((bits & 0xF) * BURIED)
-                        | ((bits >> 4) * CLOSED);
+                        | (((bits >> 4) & 3) * CLOSED)
+                        | if bits & (1 << 6) != 0 { SEES_BACKS } else { 0 };
                     p.exposed = o[1];
                     p.shadow = o[2];
                     c.st.set_patch(c.ws, e, &p);
@@ -163,8 +165,12 @@ fn prepare<V: Visibility + ?Sized>(
     for side in 0..State::sides(e) {
         let n = if side == 0 { normal } else { -normal };
         let seed = hash3(e.0, side as u32, 0xC105);
-        if is_closed(st, &pts[..m], n, p.poly, seed, vis, &mut rays) {
+        let (closed, backs) = is_closed(st, ws, &pts[..m], n, p.poly, seed, vis, &mut rays);
+        if closed {
             bits |= 1 << (4 + side);
+        }
+        if backs {
+            bits |= 1 << 6;
         }
     }
     out[0] = bits as f32;
@@ -185,9 +191,7 @@ fn prepare<V: Visibility + ?Sized>(
                 continue;
             }
             let seed = hash3(e.0, k, 0x5A11);
-            let lit = lit_fraction(
-                corners, cells, seed, p.poly, towards, st.far, vis, &mut rays,
-            );
+            let lit = lit_fraction(st, corners, cells, seed, p.poly, towards, vis, &mut rays);
             let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
             let mut e_max = 0.0f32;
             for (b, d) in direct[side][..nb].iter_mut().enumerate() {
@@ -263,7 +267,7 @@ fn is_buried<V: Visibility + ?Sized>(
             cosine_direction(n, u, v)
         };
         *rays += 1;
-        let Some((hit, _)) = vis.first_hit(x, x + d * st.far, [poly, NONE]) else {
+        let Some((hit, _)) = vis.first_hit(x, st.beyond(x, d), [poly, NONE]) else {
             return false;
         };
         if hit >= st.polygons {
@@ -279,17 +283,21 @@ fn is_buried<V: Visibility + ?Sized>(
     true
 }
 
-/// True when no ray from the points, in 4 stratified cosine-distributed directions each
-/// about `n`, leaves the scene.
+/// Whether no ray from the points, in 4 stratified cosine-distributed directions each about
+/// `n`, leaves the scene; and whether one of them met the back of a one-sided polygon (which
+/// absorbs: see `no_steady_state`).
+#[allow(clippy::too_many_arguments)]
 fn is_closed<V: Visibility + ?Sized>(
     st: &State,
+    ws: &[u8],
     points: &[Vec3],
     n: Vec3,
     poly: u32,
     seed: u32,
     vis: &V,
     rays: &mut u32,
-) -> bool {
+) -> (bool, bool) {
+    let mut backs = false;
     for (q, &x) in points.iter().enumerate() {
         for j in 0..4u32 {
             let (u, v) = unit2(hash3(seed, q as u32 * 4 + j, 0xE5C));
@@ -297,12 +305,44 @@ fn is_closed<V: Visibility + ?Sized>(
             let v = ((j / 2) as f32 + v) * 0.5;
             let d = cosine_direction(n, u, v);
             *rays += 1;
-            if vis.first_hit(x, x + d * st.far, [poly, NONE]).is_none() {
-                return false;
+            match vis.first_hit(x, st.beyond(x, d), [poly, NONE]) {
+                None => return (false, backs),
+                Some((hit, _)) if hit < st.polygons => {
+                    let hp = st.polygon(ws, hit);
+                    let one_sided = st.material(ws, hp.material).two_sided == 0;
+                    backs |= one_sided && Vec3::from(hp.normal).dot(d) > 0.0;
+                }
+                Some(_) => {}
             }
         }
     }
-    true
+    (true, backs)
+}
+
+/// A band in which the scene has no steady state: no ray from any patch leaves it, none met
+/// the back of a one-sided polygon, every material reflects or transmits all of that band
+/// on every side light can reach, and something emits in it. Light there would grow without
+/// bound.
+pub(crate) fn no_steady_state(st: &State, ws: &[u8]) -> Option<usize> {
+    let mut emits = [false; 8];
+    let mut lossy = [false; 8];
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        for i in 0..st.pool(kind).len {
+            let e = Elem::new(kind, i);
+            let p = st.patch(ws, e);
+            if p.shape & SEES_BACKS != 0 || (0..State::sides(e)).any(|side| !p.closed(side)) {
+                return None;
+            }
+            let m = st.material(ws, st.polygon(ws, p.poly).material);
+            for b in 0..st.bands {
+                for side in 0..State::sides(e) {
+                    emits[b] |= m.emit[side][b] > 0.0;
+                    lossy[b] |= m.rho[side][b] + m.tau[b] < 1.0 - 1e-6;
+                }
+            }
+        }
+    }
+    (0..st.bands).find(|&b| emits[b] && !lossy[b])
 }
 
 /// A cosine-distributed unit direction about `n` from `u, v` in [0, 1).
@@ -331,12 +371,12 @@ fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
 /// [`SUN_DEPTH`] levels), every sample weighted by its share of the area.
 #[allow(clippy::too_many_arguments)]
 fn lit_fraction<V: Visibility + ?Sized>(
+    st: &State,
     corners: &[Vec3],
     cells: u32,
     seed: u32,
     poly: u32,
     towards: Vec3,
-    far: f32,
     vis: &V,
     rays: &mut u32,
 ) -> f32 {
@@ -365,7 +405,7 @@ fn lit_fraction<V: Visibility + ?Sized>(
             let vv = v0 + ((k / 2) as f32 + jv) * half;
             let x = point_on(corners, u, vv);
             *rays += 1;
-            *v = vis.transmittance(x, x + towards * far, [poly, NONE]);
+            *v = vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
             *w = jacobian(corners, u, vv);
         }
         let mixed = vals.iter().any(|&v| v != vals[0]);
@@ -472,7 +512,7 @@ fn sky_light<V: Visibility + ?Sized>(
         let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, pick)));
         let x = point_on(corners, u, v);
         *rays += 1;
-        let t = vis.transmittance(x, x + Vec3::from(src.towards) * st.far, [p.poly, NONE]);
+        let t = vis.transmittance(x, st.beyond(x, Vec3::from(src.towards)), [p.poly, NONE]);
         if t <= 0.0 {
             continue;
         }
@@ -487,7 +527,7 @@ fn sky_light<V: Visibility + ?Sized>(
 
 /// A stride in `count / 2 .. count` coprime with `count` (1 for small counts), chosen from
 /// `h`: walking `j * stride mod count` visits every index once.
-fn coprime_stride(count: u32, h: u32) -> u32 {
+pub(crate) fn coprime_stride(count: u32, h: u32) -> u32 {
     if count <= 2 {
         return 1;
     }

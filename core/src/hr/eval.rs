@@ -234,7 +234,7 @@ fn to_point<V: Visibility + ?Sized>(
             if c <= 0.0 {
                 return (0.0, 0.0, 0);
             }
-            let v = vis.transmittance(x, x + towards * st.far, [poly, NONE]);
+            let v = vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
             out.rays += 1;
             out.partial |= v < 1.0;
             (c * v, c, 0)
@@ -293,7 +293,7 @@ fn flux_at<V: Visibility + ?Sized>(
             (f, f, 0, v, d.normalize_or_zero())
         }
         Shape::Source { towards } => {
-            let v = vis.transmittance(x, x + towards * st.far, [px, NONE]);
+            let v = vis.transmittance(x, st.beyond(x, towards), [px, NONE]);
             (1.0, 1.0, 0, v, towards)
         }
     }

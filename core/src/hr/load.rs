@@ -82,6 +82,8 @@ pub(crate) fn load<S: SceneSource>(
         typical_area: 0.0,
         min_area: 0.0,
         far: 0.0,
+        scene_min: Vec3::ZERO,
+        scene_max: Vec3::ZERO,
         stats: Stats {
             polygons: census.polygons(),
             ..Stats::default()
@@ -360,7 +362,7 @@ fn add_root_patch(
         links: NONE,
         area: shape.area,
         shape: corners.len() as u32 | UNPREPARED,
-        closure: [1.0; 2],
+        closure: [0.0; 2],
         exposed: 1.0,
         shadow: 0.0,
     };
@@ -596,4 +598,6 @@ fn totals(s: &mut State, ws: &[u8], sources: u32) {
     s.stats.emitted_power = s.power;
     s.min_area = root.area * s.settings.min_area;
     s.far = 4.0 * d.length().max(f32::MIN_POSITIVE);
+    s.scene_min = lo;
+    s.scene_max = hi;
 }

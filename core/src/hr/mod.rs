@@ -16,6 +16,7 @@
 //! [`Executor`], so that a caller can spread it over threads: chunks are independent and
 //! applied in order, so results are bit-identical for any number of threads.
 
+mod balance;
 mod census;
 mod closure;
 mod direct;
@@ -34,6 +35,7 @@ mod solve;
 mod state;
 mod vis;
 
+pub use balance::Balance;
 pub use census::{Census, census, census_scratch_bytes, grouping_clusters};
 pub use exec::{Executor, NoProgress, Progress, Sequential};
 
@@ -136,8 +138,17 @@ pub struct Stats {
     pub budget_limited: bool,
     /// True when the last solution stopped at the iteration cap before converging.
     pub iteration_capped: bool,
-    /// The scene's emitted power that epsilon is relative to (W, largest band).
+    /// The power epsilon was relative to at the end (W, largest band): what leaves all
+    /// surfaces, emitted and reflected.
     pub emitted_power: f32,
+    /// True when the last solution met the tolerance (false: it stopped at the iteration
+    /// cap, see `remaining_change`).
+    pub converged: bool,
+    /// The estimated change still to come in the last solution, relative to the largest
+    /// radiosity (the geometric tail of the last iterations' changes).
+    pub remaining_change: f32,
+    /// Where the power went, per band.
+    pub balance: Balance,
 }
 
 /// Why a solve could not run.
@@ -164,6 +175,12 @@ pub enum HrError {
     BadGeometry {
         /// Global id of the polygon.
         polygon: u64,
+    },
+    /// The scene has no steady state in a band: it is closed (no light leaves it), nothing
+    /// in it absorbs that band, and something emits it.
+    NoSteadyState {
+        /// The band.
+        band: u32,
     },
 }
 
@@ -192,6 +209,10 @@ impl core::fmt::Display for HrError {
             }
             HrError::Empty => f.write_str("the scene has no polygons"),
             HrError::Settings(what) => write!(f, "invalid setting: {what}"),
+            HrError::NoSteadyState { band } => write!(
+                f,
+                "no steady state in band {band}: the scene is closed (no light leaves it), every surface reflects or transmits all of that band, and light is emitted in it, so its radiosity would grow without bound (give some surface a reflectance below 1, or open the scene)"
+            ),
             HrError::BadGeometry { polygon } => {
                 write!(
                     f,
@@ -463,6 +484,9 @@ where
         scratch,
     };
     direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+    if let Some(band) = direct::no_steady_state(&st, ws) {
+        return Err(HrError::NoSteadyState { band: band as u32 }.into());
+    }
     solve::pull(&st, ws);
     st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
     refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
@@ -481,6 +505,8 @@ where
     st.stats.clusters = st.clusters as u64;
     st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
+    st.stats.emitted_power = st.power;
+    st.stats.balance = balance::measure(&st, ws, &vis, &mut seq, 4 * settings.rays, progress);
     progress.report("writing (polygons)", 0, st.polygons as u64);
     output::emit(&st, ws, sink).map_err(SolveError::Sink)?;
     Ok(st.stats)

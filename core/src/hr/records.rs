@@ -22,9 +22,8 @@ pub(crate) struct Patch {
     pub area: f32,
     /// Corner count (3 or 4) in the low byte, subdivision depth in the next.
     pub shape: u32,
-    /// Per receiving side, the factor that makes the irradiance inherited from ancestor
-    /// patches exact at this patch's own quadrature points (see `closure`): 1 when the
-    /// patch inherits nothing.
+    /// Per receiving side, the closure factor minus 1 (see `closure`): what the patch's
+    /// links bring is scaled by `1 + closure`. 0 in scenes light can leave.
     pub closure: [f32; 2],
     /// Fraction of the area not buried inside closed objects (0..=1): the weight of the
     /// patch's radiosity in its parent's (see `direct`). Points of a floor under a block see
@@ -162,6 +161,8 @@ pub(crate) const BURIED: u32 = 1 << 17;
 pub(crate) const UNPREPARED: u32 = 1 << 21;
 /// Patch `shape` bits 22 (front) and 23 (back): no ray from that side leaves the scene.
 pub(crate) const CLOSED: u32 = 1 << 22;
+/// Patch `shape` bit 24: a ray from it met the back of a one-sided polygon.
+pub(crate) const SEES_BACKS: u32 = 1 << 24;
 
 /// The link's coefficients have not been computed yet.
 pub(crate) const PENDING: u32 = 1;

@@ -290,7 +290,7 @@ fn subdivide_patch(st: &mut State, ws: &mut [u8], e: Elem, p: &Patch, pool: usiz
             links: NONE,
             area: shape,
             shape: n as u32 | ((p.depth() + 1) << 8) | STALE | UNPREPARED,
-            closure: [1.0; 2],
+            closure: [0.0; 2],
             exposed: p.exposed,
             shadow: 0.0,
         };

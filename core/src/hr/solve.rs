@@ -24,41 +24,89 @@ struct Ctx<'a> {
 }
 
 /// Iterates to convergence; returns the iterations run.
+///
+/// The change of the largest leaf radiosity shrinks by about the same ratio q every
+/// iteration once the slowest mode dominates; the change still to come is then
+/// `change * q / (1 - q)`. q is taken as the largest ratio of the last [`WINDOW`] iterations
+/// (a single ratio is often optimistic while faster modes die out), and the solution stops
+/// when that estimate, and the last change itself, are below the tolerance of the largest
+/// radiosity. At the iteration cap the solution is reported as not converged with its
+/// estimate.
+///
+/// Where reflection goes on for long (q near 1: rooms of white walls, a furnace with
+/// rho = 0.9999) and q has settled, one iteration is extrapolated: every leaf moves by its
+/// change times `q / (1 - q)`, the sum of the geometric tail (Aitken's extrapolation of the
+/// slowest mode). The faster modes that this misjudges die out in the iterations after it.
 pub(crate) fn iterate<E: Executor, P: Progress>(
     st: &mut State,
     ws: &mut [u8],
     ex: &mut Fallback<'_, E>,
     progress: &mut P,
 ) -> u32 {
+    let mut ratios = [0.0f32; WINDOW];
     let mut last = f32::INFINITY;
     let mut iterations = 0;
+    let mut remaining = f32::INFINITY;
+    let mut extrapolate = 0.0f32;
+    let mut settled = 0usize;
     st.stats.iteration_capped = false;
+    st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
         gather(st, ws, ex, false);
         push(st, ws);
-        let (change, b_max) = pull(st, ws);
+        let jumped = extrapolate > 0.0;
+        let (change, b_max) = pull_extrapolated(st, ws, extrapolate);
+        extrapolate = 0.0;
         iterations = it + 1;
         st.stats.iterations += 1;
         progress.report("solving (iterations)", it as u64 + 1, 0);
         let scale = b_max.max(f32::MIN_POSITIVE);
-        if change <= st.settings.tolerance * scale * 1e-3 {
-            return iterations;
+        let tol = st.settings.tolerance * scale;
+        if change <= tol * 1e-3 {
+            remaining = change / scale;
+            st.stats.converged = true;
+            break;
         }
-        if it > 0 && last.is_finite() && last > 0.0 {
-            let q = (change / last).min(0.999_999);
-            let remaining = change * q / (1.0 - q);
-            if q < 1.0
-                && remaining <= st.settings.tolerance * scale
-                && change <= st.settings.tolerance * scale
-            {
-                return iterations;
-            }
+        if jumped {
+            // The jump spoils this change as a measure of contraction: start over.
+            ratios = [0.0; WINDOW];
+            settled = 0;
+            last = f32::INFINITY;
+            continue;
+        }
+        if last.is_finite() && last > 0.0 {
+            ratios[settled % WINDOW] = change / last;
+            settled += 1;
         }
         last = change;
+        if settled >= WINDOW {
+            let q = ratios.iter().copied().fold(0.0f32, f32::max);
+            let q_min = ratios.iter().copied().fold(f32::INFINITY, f32::min);
+            if (0.9..1.0).contains(&q) && q - q_min <= 0.01 * (1.0 - q_min) {
+                extrapolate = (q / (1.0 - q)).min(1e6);
+            }
+            remaining = if q < 1.0 {
+                change * q / (1.0 - q)
+            } else {
+                f32::INFINITY
+            };
+            if remaining <= tol && change <= tol {
+                remaining /= scale;
+                st.stats.converged = true;
+                break;
+            }
+            remaining /= scale;
+        }
     }
-    st.stats.iteration_capped = true;
+    if !st.stats.converged {
+        st.stats.iteration_capped = true;
+    }
+    st.stats.remaining_change = remaining;
     iterations
 }
+
+/// Iterations over which the contraction ratio is judged.
+const WINDOW: usize = 8;
 
 /// Every patch's gathered irradiance, and what the links received by clusters bring their
 /// polygons (see `oriented`).
@@ -90,7 +138,9 @@ pub(crate) fn gather<E: Executor>(
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                 let recv = c.st.receiver((first + i) as u64);
                 let at = super::oriented::centre(c.st, c.ws, recv);
-                let h = &mut buf[slot * out..(slot + 1) * out];
+                // Sums in f64: in a closed scene with rho near 1 the light is a sum of many
+                // reflections that f32 rounding would bias.
+                let mut h = [0.0f64; 16];
                 let mut cur = c.st.links_head(c.ws, recv);
                 while cur != NONE {
                     let l = c.st.link(c.ws, cur);
@@ -119,12 +169,15 @@ pub(crate) fn gather<E: Executor>(
                             let coef = if kk == 1 { k[0] } else { k[r * 2 + s] };
                             if coef != 0.0 {
                                 for (hb, bb) in h[r * nb..(r + 1) * nb].iter_mut().zip(&b[..nb]) {
-                                    *hb += coef * bb;
+                                    *hb += coef as f64 * *bb as f64;
                                 }
                             }
                         }
                     }
                     cur = l.next;
+                }
+                for (o, v) in buf[slot * out..(slot + 1) * out].iter_mut().zip(&h) {
+                    *o = *v as f32;
                 }
             }
         },
@@ -169,6 +222,12 @@ pub(crate) fn push(st: &State, ws: &mut [u8]) {
 /// area (buried parts are seen by nothing); polygons record their power for `oriented`;
 /// clusters take the power of their surfaces over their area.
 pub(crate) fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
+    pull_extrapolated(st, ws, 0.0)
+}
+
+/// [`pull`], with every leaf's change from its previous radiosity scaled by
+/// `1 + extrapolate` (see [`iterate`]); the returned change is before scaling.
+fn pull_extrapolated(st: &State, ws: &mut [u8], extrapolate: f32) -> (f32, f32) {
     let nb = st.bands;
     let (mut change, mut b_max) = (0.0f32, 0.0f32);
     for kind in [Kind::Patch2, Kind::Patch1] {
@@ -230,11 +289,14 @@ pub(crate) fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
                     st.set_patch(ws, e, &p);
                 }
             }
-            for (side, ns) in new.iter().enumerate().take(sides) {
+            for (side, ns) in new.iter_mut().enumerate().take(sides) {
                 let b = st.b_mut(ws, e, side);
-                for (old, n) in b.iter_mut().zip(&ns[..nb]) {
+                for (old, n) in b.iter_mut().zip(ns[..nb].iter_mut()) {
                     if p.first_child == NONE {
-                        change = change.max((n - *old).abs());
+                        change = change.max((*n - *old).abs());
+                        if extrapolate > 0.0 {
+                            *n = (*n + (*n - *old) * extrapolate).max(0.0);
+                        }
                     }
                     b_max = b_max.max(*n);
                     *old = *n;

@@ -40,6 +40,9 @@ pub(crate) struct State {
     pub min_area: f32,
     /// Length beyond which a ray towards a directional source has left the scene (m).
     pub far: f32,
+    /// The scene's box (m).
+    pub scene_min: Vec3,
+    pub scene_max: Vec3,
     pub stats: Stats,
 }
 
@@ -65,6 +68,26 @@ pub(crate) enum Shape {
 }
 
 impl State {
+    /// The end of a ray from `x` along the unit direction `d` that has left the scene: twice
+    /// as far as the scene's box reaches that way, so that a polygon on the box's boundary
+    /// is met in the middle of the segment, well inside the caster's relative margins
+    /// (a segment of fixed great length would let rays starting near an edge slip past the
+    /// polygon beside it).
+    pub(crate) fn beyond(&self, x: Vec3, d: Vec3) -> Vec3 {
+        let mut t = f32::INFINITY;
+        for k in 0..3 {
+            let dk = d[k];
+            if dk > 0.0 {
+                t = t.min((self.scene_max[k] - x[k]) / dk);
+            } else if dk < 0.0 {
+                t = t.min((self.scene_min[k] - x[k]) / dk);
+            }
+        }
+        let diag = (self.scene_max - self.scene_min).length();
+        let t = if t.is_finite() { t.max(0.0) } else { self.far };
+        x + d * (2.0 * t + 1e-3 * diag).min(self.far)
+    }
+
     pub(crate) fn pool(&self, k: Kind) -> &Pool {
         match k {
             Kind::Patch2 => &self.patches[1],

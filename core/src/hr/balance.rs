@@ -1,0 +1,334 @@
+//! The power balance of a finished solve, per band: what enters (emitted by surfaces, direct
+//! light of suns and sky that reaches a surface) against where it goes (absorbed by
+//! surfaces, absorbed by the backs of one-sided polygons, escaping the scene).
+//!
+//! Absorption comes from the solution itself (`(1 - rho - tau) H` on every receiving side of
+//! every exposed leaf). Where the light that leaves each leaf ends up is measured apart from
+//! the links, by rays: from stratified points of every emitting leaf side, in stratified
+//! cosine-distributed directions, a ray that meets nothing escapes, one that meets the back
+//! of a one-sided polygon is absorbed there, any other is carried by the solution to a
+//! receiver. So the imbalance `in - absorbed - escaped` is a real check of the transport: a
+//! solution that hands out more light than its emitters send (close, badly integrated
+//! links) shows a negative imbalance, one that loses light a positive one.
+
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::ids::{Elem, Kind};
+use super::layout::CHUNK;
+use super::records::Source;
+use super::state::State;
+use super::vis::{Ray, Vis, WsPolygons};
+use crate::limits::{MAX_BANDS, NONE};
+use crate::sampling::{hash3, point_on, unit2};
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// Power per band (W), with `bands` entries used.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Balance {
+    /// Emitted by surfaces (exitance x area).
+    pub emitted: [f64; MAX_BANDS],
+    /// Direct light of suns and sky that reaches a surface (front, and back of two-sided
+    /// polygons; the backs of one-sided polygons count under `absorbed_backs`).
+    pub direct: [f64; MAX_BANDS],
+    /// Absorbed by the receiving sides of surfaces.
+    pub absorbed: [f64; MAX_BANDS],
+    /// Absorbed by the backs of one-sided polygons (and by parts buried inside closed
+    /// objects).
+    pub absorbed_backs: [f64; MAX_BANDS],
+    /// Leaving the scene.
+    pub escaped: [f64; MAX_BANDS],
+}
+
+impl Balance {
+    /// What enters minus what is absorbed or escapes, per band (W).
+    pub fn imbalance(&self, band: usize) -> f64 {
+        self.emitted[band] + self.direct[band]
+            - self.absorbed[band]
+            - self.absorbed_backs[band]
+            - self.escaped[band]
+    }
+
+    /// The imbalance as a fraction of what enters (0 when nothing enters).
+    pub fn relative_imbalance(&self, band: usize) -> f64 {
+        let input = self.emitted[band] + self.direct[band];
+        if input > 0.0 {
+            self.imbalance(band) / input
+        } else {
+            0.0
+        }
+    }
+}
+
+struct Ctx<'a, 'v, V: ?Sized> {
+    st: &'a State,
+    ws: &'a [u8],
+    vis: &'a Vis<'v, V>,
+    out: Balance,
+}
+
+/// Measures the balance of the current solution: `rays` per emitting leaf side on average,
+/// more where more power leaves (up to [`MAX_RAYS`]), at least 4.
+pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
+    st: &State,
+    ws: &[u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    rays: u32,
+    progress: &mut dyn Progress,
+) -> Balance {
+    let nb = st.bands;
+    // The power leaving each leaf side sets its share of the rays.
+    let mut total = 0.0f64;
+    let mut leaves = 0u64;
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        for i in 0..st.pool(kind).len {
+            let e = Elem::new(kind, i);
+            let p = st.patch(ws, e);
+            if p.first_child == NONE {
+                leaves += 1;
+                total += leaving(st, ws, e, &p) as f64;
+            }
+        }
+    }
+    let budget = (rays as f64 * leaves as f64).max(MIN_BUDGET);
+    let per_watt = if total > 0.0 { budget / total } else { 0.0 };
+    let mut ctx = Ctx {
+        st,
+        ws,
+        vis,
+        out: Balance::default(),
+    };
+    // Per leaf: escaping and back-absorbed fractions per side, and the back direct light of
+    // one-sided polygons per band.
+    let per = 4 + nb;
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        let n = st.pool(kind).len as usize;
+        run_chunks(
+            ex,
+            &mut ctx,
+            n.div_ceil(CHUNK),
+            CHUNK * per,
+            |c: &Ctx<'_, '_, V>, chunk, buf| {
+                buf.fill(0.0);
+                let ray = Ray {
+                    vis: c.vis,
+                    polys: WsPolygons { st: c.st, ws: c.ws },
+                };
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let e = Elem::new(kind, i as u32);
+                    let p = c.st.patch(c.ws, e);
+                    if p.first_child != NONE || p.area * p.exposed <= 0.0 {
+                        continue;
+                    }
+                    let o = &mut buf[slot * per..(slot + 1) * per];
+                    let share = (per_watt * leaving(c.st, c.ws, e, &p) as f64) as u32;
+                    fates(c.st, c.ws, e, share.clamp(4, MAX_RAYS), &ray, o);
+                }
+            },
+            |c: &mut Ctx<'_, '_, V>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let e = Elem::new(kind, i as u32);
+                    add_leaf(
+                        c.st,
+                        c.ws,
+                        e,
+                        &buf[slot * per..(slot + 1) * per],
+                        &mut c.out,
+                    );
+                }
+            },
+            &mut |done, total| {
+                progress.report(
+                    "power balance (patches)",
+                    (done * CHUNK).min(n) as u64,
+                    (total * CHUNK).min(n) as u64,
+                )
+            },
+        );
+    }
+    ctx.out
+}
+
+/// Most rays for one leaf side.
+const MAX_RAYS: u32 = 16_384;
+/// Rays for the whole scene at least.
+const MIN_BUDGET: f64 = 65_536.0;
+
+/// The largest band's power leaving a leaf (W, its sides together).
+fn leaving(st: &State, ws: &[u8], e: Elem, p: &super::records::Patch) -> f32 {
+    let mut w = 0.0f32;
+    for side in 0..State::sides(e) {
+        if let Some(b) = st.b(ws, e, side) {
+            w += b.iter().copied().fold(0.0f32, f32::max);
+        }
+    }
+    w * p.area * p.exposed
+}
+
+/// Adds one leaf's part of the balance.
+fn add_leaf(st: &State, ws: &[u8], e: Elem, fate: &[f32], out: &mut Balance) {
+    let nb = st.bands;
+    let p = st.patch(ws, e);
+    if p.first_child != NONE {
+        return;
+    }
+    let m = st.material(ws, st.polygon(ws, p.poly).material);
+    let area = p.area as f64;
+    let seen = area * p.exposed as f64;
+    for b in 0..nb {
+        for side in 0..2 {
+            let emit = m.emit[side][b] as f64;
+            out.emitted[b] += area * emit;
+            // Emission from buried parts goes straight into the object around them.
+            out.absorbed_backs[b] += (area - seen) * emit;
+        }
+    }
+    let mut h = [0.0f32; 8];
+    for side in 0..State::sides(e) {
+        super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
+        let bside = st.b(ws, e, side).unwrap_or(&[]);
+        let direct = st.direct(ws, e, side);
+        for b in 0..nb {
+            let absorb = 1.0 - m.rho[side][b] as f64 - m.tau[b] as f64;
+            out.absorbed[b] += seen * absorb * h[b] as f64;
+            if let Some(d) = direct {
+                out.direct[b] += seen * d[b] as f64;
+            }
+            let leaving = seen * bside.get(b).copied().unwrap_or(0.0) as f64;
+            out.escaped[b] += leaving * fate[2 * side] as f64;
+            out.absorbed_backs[b] += leaving * fate[2 * side + 1] as f64;
+        }
+    }
+    // The direct light on the back of a one-sided polygon is absorbed there.
+    if State::sides(e) == 1 {
+        for b in 0..nb {
+            let d = seen * fate[4 + b] as f64;
+            out.direct[b] += d;
+            out.absorbed_backs[b] += d;
+        }
+    }
+}
+
+/// Fills `out` for a leaf: per side, the fractions of its light that escape and that are
+/// absorbed by one-sided backs; then (one-sided patches) the direct irradiance on its back.
+fn fates<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    rays: u32,
+    vis: &V,
+    out: &mut [f32],
+) {
+    let nb = st.bands;
+    let p = st.patch(ws, e);
+    let poly = st.polygon(ws, p.poly);
+    let normal = Vec3::from(poly.normal);
+    let n = p.corner_count();
+    let mut corners = [Vec3::ZERO; 4];
+    for (c, src) in corners.iter_mut().zip(p.corners) {
+        *c = src.into();
+    }
+    let corners = &corners[..n];
+    let rays = rays.max(1);
+    let grid = libm::floorf(libm::sqrtf(rays as f32)).max(1.0) as u32;
+    for side in 0..State::sides(e) {
+        // Only sides that send light out matter.
+        if !st
+            .b(ws, e, side)
+            .is_some_and(|b| b.iter().any(|&v| v > 0.0))
+        {
+            continue;
+        }
+        let nr = if side == 0 { normal } else { -normal };
+        let seed = hash3(e.0, side as u32, 0xBA1);
+        let (mut escaped, mut backs) = (0u32, 0u32);
+        // Directions are stratified too, in an order shuffled against the points' (a stride
+        // coprime with the cell count), so that neither pairs with the other.
+        let cells = grid * grid;
+        let stride = super::direct::coprime_stride(cells, hash3(seed, 0, 0x44));
+        for j in 0..rays {
+            let (pu, pv) = unit2(hash3(seed, j, 0x11));
+            let cell = j % (grid * grid);
+            let x = point_on(
+                corners,
+                ((cell % grid) as f32 + pu) / grid as f32,
+                ((cell / grid) as f32 + pv) / grid as f32,
+            );
+            // Directions stratified in the other order, so points and directions do not pair.
+            let dc = ((cell as u64 * stride as u64 + (j / cells) as u64) % cells as u64) as u32;
+            let (du, dv) = unit2(hash3(seed, j, 0x22));
+            let d = super::direct::cosine_direction(
+                nr,
+                ((dc % grid) as f32 + du) / grid as f32,
+                ((dc / grid) as f32 + dv) / grid as f32,
+            );
+            match vis.first_hit(x, st.beyond(x, d), [p.poly, NONE]) {
+                None => escaped += 1,
+                Some((hit, _)) if hit < st.polygons => {
+                    let hp = st.polygon(ws, hit);
+                    let one_sided = st.material(ws, hp.material).two_sided == 0;
+                    if one_sided && Vec3::from(hp.normal).dot(d) > 0.0 {
+                        backs += 1;
+                    }
+                }
+                Some(_) => {}
+            }
+        }
+        out[2 * side] = escaped as f32 / rays as f32;
+        out[2 * side + 1] = backs as f32 / rays as f32;
+    }
+    if State::sides(e) == 1 && st.sources > 0 {
+        back_direct(
+            st,
+            ws,
+            e,
+            corners,
+            normal,
+            p.poly,
+            rays,
+            vis,
+            &mut out[4..4 + nb],
+        );
+    }
+}
+
+/// Direct irradiance of suns and sky on the back of a one-sided patch (W/m^2 per band), from
+/// `rays` stratified points per source that faces it.
+#[allow(clippy::too_many_arguments)]
+fn back_direct<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    corners: &[Vec3],
+    normal: Vec3,
+    poly: u32,
+    rays: u32,
+    vis: &V,
+    out: &mut [f32],
+) {
+    let grid = libm::floorf(libm::sqrtf(rays as f32)).max(1.0) as u32;
+    for k in 0..st.sources {
+        let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, k)));
+        let towards = Vec3::from(src.towards);
+        let c = -normal.dot(towards);
+        if c <= 0.0 {
+            continue;
+        }
+        let seed = hash3(e.0, k, 0xBAC);
+        let mut lit = 0.0f32;
+        for j in 0..grid * grid {
+            let (u, v) = unit2(hash3(seed, j, 0x33));
+            let x = point_on(
+                corners,
+                ((j % grid) as f32 + u) / grid as f32,
+                ((j / grid) as f32 + v) / grid as f32,
+            );
+            lit += vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
+        }
+        lit /= (grid * grid) as f32;
+        let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
+        for (o, v) in out.iter_mut().zip(irr) {
+            *o += v * c * lit;
+        }
+    }
+}
