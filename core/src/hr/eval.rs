@@ -96,8 +96,15 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
             n,
             normal,
             poly,
+            area: r_area,
             ..
         } => {
+            if let Shape::Patch { area: e_area, .. } = e {
+                if e_area < r_area {
+                    reciprocal(st, ws, recv, &r, emit, &e, seed, rays, vis, &mut out);
+                    return out;
+                }
+            }
             // Buried points receive nothing, but count for the open coefficient: a patch
             // whose points are all buried may still be partly exposed, and its links must
             // live on to be refined where it is.
@@ -152,6 +159,125 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
         Shape::Source { .. } => {}
     }
     out
+}
+
+/// A patch's coefficients from a smaller patch, by reciprocity: the emitter's form factors
+/// to the receiver, integrated at the emitter's own quadrature points (where they vary
+/// little: the emitter is the smaller), times emitter area over receiver area. Integrating at
+/// the larger receiver's points instead can land a point right beside a small bright
+/// emitter and credit the whole receiver with its peak (a 1 mm lamp over a 1000 m floor
+/// gave the floor 1000 times the lamp's power); this way a patch never receives more than
+/// its emitter sends. The spread over the receiver comes from the open form factors at the
+/// receiver's points.
+#[allow(clippy::too_many_arguments)]
+fn reciprocal<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    r: &Shape,
+    emit: Elem,
+    e: &Shape,
+    seed: u32,
+    rays: u32,
+    vis: &V,
+    out: &mut Coefficients,
+) {
+    let (
+        Shape::Patch {
+            corners: rc,
+            n: rn,
+            normal: r_normal,
+            poly: r_poly,
+            area: r_area,
+            ..
+        },
+        Shape::Patch {
+            corners: ec,
+            n: en,
+            normal: e_normal,
+            poly: e_poly,
+            area: e_area,
+            two_sided: e_two,
+        },
+    ) = (*r, *e)
+    else {
+        return;
+    };
+    let (rc, ec) = (&rc[..rn], &ec[..en]);
+    let rp = st.patch(ws, recv);
+    let ep = st.patch(ws, emit);
+    let r_sides = recv_sides(r);
+    // Per unit of the receiver's exposed area, from the emitter's exposed points.
+    let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+    let m = exposed_quadrature(&ep, ec, &mut pts, &mut wts);
+    let seen_r = r_area * rp.exposed;
+    let ratio_open = e_area * ep.exposed / r_area;
+    let ratio = if seen_r > 0.0 {
+        e_area * ep.exposed / seen_r
+    } else {
+        0.0
+    };
+    for q in 0..m {
+        let (y, w) = (pts[q], wts[q]);
+        if w == 0.0 {
+            continue;
+        }
+        for s in 0..if e_two { 2 } else { 1 } {
+            let ns = if s == 0 { e_normal } else { -e_normal };
+            let Some(r_side) = facing_side(y, rc[0], r_normal) else {
+                continue;
+            };
+            if r_side >= r_sides {
+                continue;
+            }
+            let f = point_polygon(y, ns, rc);
+            if f <= 0.0 {
+                continue;
+            }
+            let qs = hash3(seed, q as u32, 0x5E + s as u32);
+            let (mut seen, mut cast) = (0.0f32, 0u32);
+            for j in 0..2 * rays {
+                if cast == rays {
+                    break;
+                }
+                let (u, v) = unit2(hash3(qs, j, 0xA6));
+                let x = point_on(rc, u, v);
+                if ns.dot(x - y) <= 0.0 {
+                    continue;
+                }
+                seen += vis.transmittance(y, x, [e_poly, r_poly]);
+                cast += 1;
+            }
+            out.rays += cast;
+            let v = if cast == 0 { 1.0 } else { seen / cast as f32 };
+            out.partial |= v < 1.0;
+            out.k[r_side][s] += ratio * w * f * v;
+            out.open += ratio_open * w * f;
+        }
+    }
+    out.partial |= (0..4).any(|q| rp.buried(q));
+    // How the open coefficient varies over the receiver.
+    let (mut rpts, mut rwts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+    let rm = quadrature(rc, &mut rpts, &mut rwts);
+    for side in 0..r_sides {
+        let nr = if side == 0 { r_normal } else { -r_normal };
+        let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+        for &x in &rpts[..rm] {
+            let Some(s_side) = facing_side(x, ec[0], e_normal) else {
+                continue;
+            };
+            let f = if emits(e, s_side) {
+                point_polygon(x, nr, ec)
+            } else {
+                0.0
+            };
+            lo = lo.min(f);
+            hi = hi.max(f);
+        }
+        if hi > 0.0 {
+            out.spread = out.spread.max(hi - lo.min(hi));
+        }
+    }
 }
 
 /// Irradiance coefficient at point `x` (normal `nr`, on polygon `poly`) from the emitter:
