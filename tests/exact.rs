@@ -110,3 +110,42 @@ fn cornell_box_reference() {
         r.matrix_bytes as f64 / 1e6
     );
 }
+
+#[test]
+fn polygons_placed_too_small_for_f32_are_refused() {
+    // A 10 cm leaf, valid in its original's frame, placed 1e7 m from the origin where f32
+    // coordinates are 1 m apart; scaled down instead, it stays valid (the rule is relative
+    // to the position).
+    let scene = |placement: &str| {
+        hirad::text::parse(
+            format!(
+                "hirad 1\nbands 1\nmaterial m rho 0.5 emit 1\noriginal leaf {{\n  \
+                 tri m 0 0 0  0.1 0 0  0 0.1 0\n}}\nscene {{\n  tri m 0 0 0  10 0 0  0 10 0\n  \
+                 instance leaf exact {placement}\n}}\n"
+            )
+            .as_bytes(),
+        )
+        .unwrap()
+    };
+    let settings = ExactSettings {
+        max_elements: 50,
+        ..ExactSettings::default()
+    };
+    let e = solve_exact_obvhs(
+        &scene("translate 1e7 0 0"),
+        &settings,
+        &mut Fronts::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains(
+            "polygon 1: once placed by its instances, the polygon is too small for 32-bit \
+             floats at its position: its longest edge, 0.1 m, is less than 2^-20"
+        ),
+        "{e}"
+    );
+    let mut out = Fronts::default();
+    solve_exact_obvhs(&scene("scale 1e-3"), &settings, &mut out).unwrap();
+    assert_near(out.0[1].0, 0.005e-6, 1e-5, "area of the scaled leaf");
+}

@@ -5,6 +5,7 @@ pub mod cli;
 pub mod exact;
 pub mod files;
 pub mod generate;
+pub mod numbers;
 pub mod obj;
 pub mod output;
 pub mod scene;

@@ -8,5 +8,8 @@ mod transform;
 
 pub use aabb::Aabb;
 pub use camera::camera_ok;
-pub use polygon::{DEGENERATE_REL, PLANAR_REL, PolygonShape, ShapeError, polygon_shape};
+pub use polygon::{
+    DEGENERATE_REL, MIN_AREA, PLANAR_REL, PolygonShape, RESOLUTION_REL, ShapeError,
+    below_f32_resolution, polygon_shape,
+};
 pub use transform::{Similarity, TransformError, UNIT_TOLERANCE};

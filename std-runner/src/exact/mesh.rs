@@ -4,9 +4,9 @@
 
 use super::error::ExactError;
 use super::{ExactSettings, MAX_ELEMENTS};
-use crate::scene::{ExpandVisitor, ExpandedNode, Scene, SceneError, expand};
+use crate::scene::{ExpandVisitor, ExpandedNode, Scene, SceneError, expand, too_small_message};
 use glam::Vec3;
-use hirad_core::geometry::{Aabb, polygon_shape};
+use hirad_core::geometry::{Aabb, ShapeError, polygon_shape};
 use hirad_core::limits::NONE;
 use hirad_core::material::MaterialData;
 use hirad_core::sampling::subdivide;
@@ -194,6 +194,19 @@ impl<E> ExpandVisitor for Collect<E> {
             let mut corners = [t.point(local[n - 1]); 4];
             for (w, l) in corners.iter_mut().zip(&local[..n]) {
                 *w = t.point(*l);
+            }
+            // Placed far from the origin (or scaled down), a valid polygon can become too
+            // small for f32 where it lands: refused like the hr solver refuses it.
+            if let Err(e) = polygon_shape(&corners[..n]) {
+                let message = match e {
+                    ShapeError::TooSmall => too_small_message("the polygon", &corners[..n]),
+                    e => e.to_string(),
+                };
+                self.refused = Some(ExactError::Scene(SceneError {
+                    path: format!("polygon {}", node.first_id + k as u64),
+                    message: format!("once placed by its instances, {message}"),
+                }));
+                return Err(());
             }
             self.out.push(WorldPolygon {
                 corners,

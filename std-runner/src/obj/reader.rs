@@ -12,6 +12,7 @@ use super::split::{MAX_CLIPPED_CORNERS, Piece, split};
 use super::{ObjCounts, ObjError, ObjImport};
 use crate::scene::Scene;
 use glam::Vec3;
+use hirad_core::geometry::{ShapeError, below_f32_resolution, polygon_shape};
 use hirad_core::limits::{MAX_NAME_BYTES, NONE};
 
 /// Statements of free-form geometry (curves and surfaces), skipped as one kind.
@@ -23,6 +24,24 @@ const FREE_FORM: &[&str] = &[
 /// The error for a carriage return inside a line.
 pub(crate) const BARE_CR: &str =
     "carriage return inside a line: lines must end in \\n or \\r\\n (not \\r alone)";
+
+/// Why a face of which no piece survives is skipped: too large or too small for f32 (the
+/// core's rule, see [`polygon_shape`]), or degenerate.
+fn skip_reason(points: &[Vec3]) -> &'static str {
+    let first = points.first().copied().unwrap_or_default();
+    if points.iter().any(|p| !(*p - first).is_finite()) {
+        return "face too large to measure in 32-bit floats skipped";
+    }
+    let too_small = |p: &[Vec3]| polygon_shape(p) == Err(ShapeError::TooSmall);
+    if points.len() >= 3
+        && (below_f32_resolution(points)
+            || too_small(points)
+            || (1..points.len() - 1).any(|i| too_small(&[first, points[i], points[i + 1]])))
+    {
+        return "face too small for 32-bit floats at its position skipped";
+    }
+    "degenerate face skipped"
+}
 
 /// The state of an import in progress.
 struct Reader<'a> {
@@ -234,13 +253,7 @@ impl Reader<'_> {
         })?;
         if self.pieces.is_empty() {
             self.counts.skipped_faces += 1;
-            let first = self.points.first().copied().unwrap_or_default();
-            let message = if self.points.iter().any(|p| !(*p - first).is_finite()) {
-                "face too large to measure in 32-bit floats skipped"
-            } else {
-                "degenerate face skipped"
-            };
-            self.warnings.add("", at, message);
+            self.warnings.add("", at, skip_reason(&self.points));
             return Ok(());
         }
         if skipped > 0 {

@@ -1,8 +1,10 @@
 //! Checks of the model before it is compiled, with errors that name where in the scene tree
 //! the fault is. Every physical and geometric rule is the core's own.
 
-use super::{Cluster, Scene};
-use hirad_core::geometry::{Aabb, Similarity, UNIT_TOLERANCE, camera_ok, polygon_shape};
+use super::{Cluster, Scene, too_small_message};
+use hirad_core::geometry::{
+    Aabb, ShapeError, Similarity, UNIT_TOLERANCE, camera_ok, polygon_shape,
+};
 use hirad_core::limits::{MAX_BANDS, MAX_INSTANCING_DEPTH, MAX_NAME_BYTES, MAX_NODE_DEPTH, NONE};
 use std::fmt;
 
@@ -240,8 +242,12 @@ impl Scene {
             if p.material as usize >= self.materials.len() {
                 return fail(&ppath, format!("material {} does not exist", p.material));
             }
-            if let Err(e) = polygon_shape(&corners[..n]) {
-                return fail(&ppath, e.to_string());
+            match polygon_shape(&corners[..n]) {
+                Ok(_) => {}
+                Err(ShapeError::TooSmall) => {
+                    return fail(&ppath, too_small_message("the polygon", &corners[..n]));
+                }
+                Err(e) => return fail(&ppath, e.to_string()),
             }
         }
         let mut own = Aabb::EMPTY;

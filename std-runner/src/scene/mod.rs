@@ -11,12 +11,14 @@ mod compile;
 mod decompile;
 mod expand;
 mod sample;
+mod small;
 
 pub use check::SceneError;
 pub use compile::compile;
 pub use decompile::{decompile, read_image};
 pub use expand::{ExpandVisitor, ExpandedNode, expand};
 pub use sample::sample;
+pub use small::{too_small_detail, too_small_message};
 
 pub use hirad_core::geometry::Similarity;
 pub use hirad_core::image::{CameraData, LightData, PolygonRecord as Polygon};

@@ -69,6 +69,27 @@ fn refuses_cycles_and_bad_content() {
 }
 
 #[test]
+fn refuses_polygons_too_small_for_f32() {
+    // The lamp's first polygon moved 1e6 m away and shrunk to 1 mm.
+    let mut s = sample();
+    let lamp = &mut s.root.children[0];
+    let corners = lamp.polygons[0].corners;
+    let at = Vec3::new(1e6, 0.0, 0.0);
+    for (k, &v) in corners.iter().take(3).enumerate() {
+        lamp.vertices[v as usize] = at + Vec3::new(1e-3 * k as f32, 1e-3 * (k / 2) as f32, 0.0);
+    }
+    let e = compile(&s).unwrap_err().to_string();
+    assert!(
+        e.starts_with(
+            "scene > cluster 'lamp' > polygon 0: the polygon is too small for 32-bit floats at \
+             its position: its longest edge, 0.001 m, is less than 2^-20 (about 1e-6) of its \
+             largest corner coordinate, 1e6 m, where 32-bit floats are 0.0625 m apart"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
 fn refuses_placements_beyond_f32() {
     let mut s = sample();
     s.root.children.push(Cluster {

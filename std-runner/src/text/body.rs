@@ -6,7 +6,7 @@ use super::TextError;
 use super::cursor::to_u32;
 use super::lexer::{Pos, Tok};
 use super::parser::{Entry, Parser};
-use crate::scene::{Cluster, InstanceOf, Polygon};
+use crate::scene::{Cluster, InstanceOf, Polygon, too_small_message};
 use glam::Vec3;
 use hirad_core::geometry::{ShapeError, polygon_shape};
 use hirad_core::limits::{MAX_NODE_DEPTH, NONE};
@@ -241,6 +241,7 @@ fn check_polygons(node: &Cluster, pending: &[Pending]) -> Result<(), TextError> 
                 ShapeError::Degenerate => {
                     format!("this {what} has no area (repeated or collinear corners)")
                 }
+                ShapeError::TooSmall => too_small_message(&format!("this {what}"), &pts[..n]),
                 ShapeError::NonPlanar => {
                     "this quad is not planar; split it into two triangles".to_string()
                 }

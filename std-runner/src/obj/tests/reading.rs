@@ -350,6 +350,65 @@ fn faces_beyond_f32_are_skipped_with_a_reason() {
 }
 
 #[test]
+fn faces_too_small_for_f32_are_skipped_with_a_reason() {
+    // Lines 1-3: 1 mm at 1e6 m (f32 steps 0.0625 m there); 4-6: 1 m there; 7-9: 1 um near
+    // the origin; 10-12: 1e-30 m at the origin (its area underflows); 13-17: a pentagon of
+    // 2 cm at 1e6 m.
+    let obj = "\
+v 1e6 1e6 0
+v 1000000.001 1e6 0
+v 1e6 1000000.001 0
+v 1e6 1e6 1
+v 1000001 1e6 1
+v 1e6 1000001 1
+v 1e-3 1e-3 0
+v 1.001e-3 1e-3 0
+v 1e-3 1.001e-3 0
+v 0 0 0
+v 1e-30 0 0
+v 0 1e-30 0
+v 1e6 1e6 3
+v 1000000.01 1e6 3
+v 1000000.01 1000000.01 3
+v 1000000.005 1000000.02 3
+v 1e6 1000000.01 3
+f 1 2 3
+f 4 5 6
+f 7 8 9
+f 10 11 12
+f 13 14 15 16 17
+";
+    let r = import_str(obj).unwrap();
+    assert_eq!(
+        r.warnings,
+        [
+            "18:1: face too small for 32-bit floats at its position skipped",
+            "21:1: face too small for 32-bit floats at its position skipped",
+            "22:1: face too small for 32-bit floats at its position skipped",
+        ]
+    );
+    assert_eq!(r.counts.skipped_faces, 3);
+    assert_eq!(r.counts.polygons, 2);
+    let areas: Vec<f32> = r
+        .scene
+        .root
+        .polygons
+        .iter()
+        .map(|p| {
+            let c = p
+                .corners
+                .map(|i| r.scene.root.vertices.get(i as usize).copied());
+            polygon_shape(&[c[0].unwrap(), c[1].unwrap(), c[2].unwrap()])
+                .unwrap()
+                .area
+        })
+        .collect();
+    assert_eq!(areas[0], 0.5);
+    assert!((areas[1] / 0.5e-12 - 1.0).abs() < 1e-3, "{areas:?}");
+    crate::scene::compile(&r.scene).unwrap();
+}
+
+#[test]
 fn warnings_are_capped() {
     let mut obj = String::from("v 0 0 0\nv 1 0 0\n");
     for _ in 0..MAX_WARNINGS + 5 {

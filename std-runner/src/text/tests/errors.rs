@@ -275,6 +275,55 @@ fn bad_shapes() {
 }
 
 #[test]
+fn polygons_too_small_for_f32_at_their_position() {
+    // 1e-30 m at (1, 1, 1): the corners round to one point.
+    fails_at(
+        doc(
+            "v 0 0 0\n  tri white 1 1 1  1.000000000000000000000000000001 1 1  1 1.000000000000000000000000000001 1",
+        ),
+        7,
+        3,
+        "this triangle is too small for 32-bit floats at its position: its corners round to \
+         one point at its largest corner coordinate, 1 m, where 32-bit floats are 1.192e-7 m \
+         apart; move the scene nearer the origin",
+    );
+    // 1e-30 m at the origin: distinct corners, but the area (5e-61 m^2) underflows.
+    fails_at(
+        doc("tri white 0 0 0 1e-30 0 0 0 1e-30 0"),
+        6,
+        1,
+        "this triangle is too small for 32-bit floats at its position: its area, 5e-61 m^2, \
+         is below the smallest normal 32-bit float, 1.175e-38 m^2",
+    );
+    // 1 mm at 1e6 m, where f32 coordinates are 0.0625 m apart.
+    fails_at(
+        doc("v 1e6 1e6 0\nv 1000000.001 1e6 0\nv 1e6 1000000.001 0\ntri white 0 1 2"),
+        9,
+        1,
+        "its corners round to one point at its largest corner coordinate, 1e6 m, where \
+         32-bit floats are 0.0625 m apart",
+    );
+    fails_at(
+        doc("tri white 1e6 0 0  1000000.25 0 0  1e6 0.25 0"),
+        6,
+        1,
+        "its longest edge, 0.3536 m, is less than 2^-20 (about 1e-6) of its largest corner \
+         coordinate, 1e6 m",
+    );
+    // Inside an approximate instance's body too (its own frame).
+    let src = "hirad 1\nbands 1\nmaterial m rho 0.5\noriginal o {\n  tri m 0 0 0 1 0 0 0 1 0\n}\n\
+               scene {\n  instance o approx {\n    tri m 1e6 0 0 1000000.001 0 0 1e6 0.001 0\n  }\n}\n";
+    fails_at(src, 9, 5, "too small for 32-bit floats");
+    // Accepted: 1 um near the origin, 1 m at 1e6 m.
+    let s = super::ok(&doc(
+        "tri white 1e-3 2e-3 0  1.001e-3 2e-3 0  1e-3 2.001e-3 0",
+    ));
+    assert_eq!(s.root.polygons.len(), 1);
+    let s = super::ok(&doc("tri white 1e6 1e6 0  1000001 1e6 0  1e6 1000001 0"));
+    assert_eq!(s.root.polygons.len(), 1);
+}
+
+#[test]
 fn vertex_indices_out_of_range() {
     fails_at(
         doc("v 0 0 0\nv 1 0 0\nv 0 1 0\ntri white 0 1 3"),
