@@ -228,14 +228,15 @@ fn prepare<V: Visibility + ?Sized>(
     out[3 + 2 * nb] = rays as f32;
 }
 
-/// Cells along each side of a patch's sampling grid: about one per typical polygon of the
-/// scene along its side, at least 1, at most [`MAX_CELLS`].
+/// Cells along each side of a patch's sampling grid: two per typical polygon of the scene
+/// along its side (a shadow is cast by a polygon, so it can be as narrow as one), at least
+/// 2, at most [`MAX_CELLS`].
 fn cells_for(st: &State, area: f32) -> u32 {
     if st.typical_area.is_nan() || st.typical_area <= 0.0 || area.is_nan() || area <= 0.0 {
-        return 1;
+        return 2;
     }
-    let r = libm::sqrtf(area / st.typical_area);
-    (libm::ceilf(r) as u32).clamp(1, MAX_CELLS)
+    let r = 2.0 * libm::sqrtf(area / st.typical_area);
+    (libm::ceilf(r) as u32).clamp(2, MAX_CELLS)
 }
 
 /// Sky samples for a grid: `rays` per cell, at least 16.

@@ -82,6 +82,7 @@ pub(crate) fn load<S: SceneSource>(
         typical_area: 0.0,
         min_area: 0.0,
         far: 0.0,
+        contraction: f32::INFINITY,
         scene_min: Vec3::ZERO,
         scene_max: Vec3::ZERO,
         stats: Stats {

@@ -44,11 +44,16 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     progress: &mut P,
 ) -> u32 {
     let mut ratios = [0.0f32; WINDOW];
+    let mut changes = [0.0f32; WINDOW];
     let mut last = f32::INFINITY;
     let mut iterations = 0;
     let mut remaining = f32::INFINITY;
     let mut extrapolate = 0.0f32;
     let mut settled = 0usize;
+    let mut last_scale = 0.0f32;
+    // The contraction of the previous solution (the same operator, refined): a warm start
+    // may begin right at the answer, where rounding hides it.
+    let mut q_known = st.contraction;
     st.stats.iteration_capped = false;
     st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
@@ -61,6 +66,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         st.stats.iterations += 1;
         progress.report("solving (iterations)", it as u64 + 1, 0);
         let scale = b_max.max(f32::MIN_POSITIVE);
+        last_scale = scale;
         let tol = st.settings.tolerance * scale;
         if change <= tol * 1e-3 {
             remaining = change / scale;
@@ -70,23 +76,30 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         if jumped {
             // The jump spoils this change as a measure of contraction: start over.
             ratios = [0.0; WINDOW];
+            changes = [0.0; WINDOW];
             settled = 0;
             last = f32::INFINITY;
             continue;
         }
         if last.is_finite() && last > 0.0 {
             ratios[settled % WINDOW] = change / last;
+            changes[settled % WINDOW] = change;
             settled += 1;
         }
         last = change;
         if settled >= WINDOW {
             let q = ratios.iter().copied().fold(0.0f32, f32::max);
             let q_min = ratios.iter().copied().fold(f32::INFINITY, f32::min);
+            if q < 1.0 {
+                q_known = q;
+                st.contraction = q;
+            }
             if (0.9..1.0).contains(&q) && q - q_min <= 0.01 * (1.0 - q_min) {
                 extrapolate = (q / (1.0 - q)).min(1e6);
             }
-            remaining = if q < 1.0 {
-                change * q / (1.0 - q)
+            // Changes lost in rounding do not tell the contraction: keep the last one known.
+            remaining = if q_known < 1.0 {
+                change * q_known / (1.0 - q_known)
             } else {
                 f32::INFINITY
             };
@@ -96,10 +109,33 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
                 break;
             }
             remaining /= scale;
+            // Down to single-precision rounding while the estimate is still above the
+            // tolerance: more iterations cannot help, say so now.
+            let floor = changes.iter().copied().fold(0.0f32, f32::max);
+            if floor <= scale * 4.0 * f32::EPSILON && extrapolate == 0.0 {
+                if !remaining.is_finite() {
+                    // Never seen contracting, and already still: nothing left to change.
+                    remaining = floor / scale;
+                    st.stats.converged = remaining <= st.settings.tolerance;
+                }
+                break;
+            }
         }
     }
     if !st.stats.converged {
         st.stats.iteration_capped = true;
+        // Whatever ratios there are make the estimate (none: unknown).
+        let k = settled.min(WINDOW);
+        if k > 0 && !remaining.is_finite() {
+            let q = ratios[..k]
+                .iter()
+                .copied()
+                .fold(0.0f32, f32::max)
+                .min(q_known);
+            if q < 1.0 && last.is_finite() && last_scale > 0.0 {
+                remaining = last * q / (1.0 - q) / last_scale;
+            }
+        }
     }
     st.stats.remaining_change = remaining;
     iterations

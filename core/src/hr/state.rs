@@ -40,6 +40,8 @@ pub(crate) struct State {
     pub min_area: f32,
     /// Length beyond which a ray towards a directional source has left the scene (m).
     pub far: f32,
+    /// The contraction ratio of the last solution's iterations (infinite until known).
+    pub contraction: f32,
     /// The scene's box (m).
     pub scene_min: Vec3,
     pub scene_max: Vec3,
