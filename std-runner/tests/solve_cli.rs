@@ -233,3 +233,119 @@ fn bad_options_are_refused() {
         .collect();
     assert_eq!(left, ["other.csv"]);
 }
+
+#[test]
+fn reference_names_the_five_worst_polygons() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let box_ = fixture("cornell_box.hir");
+    let solution = d.join("solution.csv");
+    ok(&["solve", "-q", s(&box_), "--results", s(&solution)]);
+    // The reference: the box's own solution (solves are deterministic) with seven values
+    // changed so that the result is off by known fractions there.
+    let text = std::fs::read_to_string(&solution).unwrap();
+    let mut rows: Vec<Vec<String>> = text
+        .lines()
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(&rows[0][..5], ["id", "area", "rad_0", "rad_1", "rad_2"]);
+    // (id, band, relative error of the result): the sixth is not among the five, and the
+    // seventh is a dark column (below 0.1% of the largest radiosity, the light's) whose
+    // relative error does not count.
+    let off = [
+        (2u64, 1usize, 0.10),
+        (5, 0, -0.40),
+        (0, 0, 0.50),
+        (14, 1, 0.30),
+        (12, 0, -0.20),
+        (7, 2, 0.05),
+        (9, 2, 10.0),
+    ];
+    let max = rows[1..]
+        .iter()
+        .flat_map(|r| r[2..5].iter().map(|v| v.parse::<f32>().unwrap()))
+        .fold(0.0f32, f32::max);
+    for &(id, band, e) in &off {
+        let row = &mut rows[1 + id as usize];
+        assert_eq!(row[0], id.to_string());
+        let got: f32 = row[2 + band].parse().unwrap();
+        // Well above the floor, or well below it for the dark one.
+        let reference = f64::from(got) / (1.0 + e);
+        let floor = 1e-3 * f64::from(max);
+        assert!(
+            if e > 1.0 {
+                reference < 0.5 * floor
+            } else {
+                reference > 2.0 * floor
+            },
+            "polygon {id} band {band}: {got} of {max}"
+        );
+        row[2 + band] = format!("{}", (f64::from(got) / (1.0 + e)) as f32);
+    }
+    let reference = d.join("reference.csv");
+    let table: Vec<String> = rows.iter().map(|r| r.join(",")).collect();
+    std::fs::write(&reference, table.join("\n") + "\n").unwrap();
+    let stats = d.join("stats.json");
+    let out = ok(&[
+        "solve",
+        "-q",
+        s(&box_),
+        "--reference",
+        s(&reference),
+        "--stats",
+        s(&stats),
+    ]);
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines[0].starts_with("error "), "{out}");
+    assert!(
+        lines[1].starts_with(
+            "worst polygons (relative error of radiosity, where the reference is at least 0.1% \
+             of its largest, "
+        ),
+        "{out}"
+    );
+    assert_eq!(lines.len(), 7, "{out}");
+    let names = ["red", "green", "blue"];
+    let want = [
+        (0u64, 0usize, 50.0),
+        (5, 0, -40.0),
+        (14, 1, 30.0),
+        (12, 0, -20.0),
+        (2, 1, 10.0),
+    ];
+    for (line, &(id, band, pct)) in lines[2..].iter().zip(&want) {
+        let head = format!("  id {id} front band {band} ({}): reference ", names[band]);
+        assert!(
+            line.starts_with(&head),
+            "{line:?} should start with {head:?}\n{out}"
+        );
+        let printed: f64 = line
+            .rsplit(", ")
+            .next()
+            .and_then(|p| p.strip_suffix(" %"))
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((printed - pct).abs() < 0.015, "{line}");
+        assert!(
+            line.contains(if pct > 0.0 { ", +" } else { ", -" }),
+            "{line}"
+        );
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let worst = json["worst_polygons"].as_array().unwrap();
+    assert_eq!(worst.len(), 5, "{json}");
+    for (w, &(id, band, pct)) in worst.iter().zip(&want) {
+        assert_eq!(w["id"], id);
+        assert_eq!(w["band"], band);
+        assert_eq!(w["back"], false);
+        let got = w["relative_error_percent"].as_f64().unwrap();
+        assert!((got - pct).abs() < 1e-3, "{w}");
+        let (r, g) = (
+            w["reference"].as_f64().unwrap(),
+            w["result"].as_f64().unwrap(),
+        );
+        assert!((100.0 * (g - r) / r - got).abs() < 1e-4, "{w}");
+    }
+}

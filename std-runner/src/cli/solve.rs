@@ -59,7 +59,8 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub supersample: u32,
     /// Compare with this results table and print the L2 error (area-weighted, in percent of
-    /// the reference's largest radiosity).
+    /// the reference's largest radiosity) and the five polygons with the largest relative
+    /// error (where the reference is at least 0.1% of its largest).
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Ray caster for hr.
@@ -201,6 +202,7 @@ pub fn run(a: Args) -> Result<()> {
         error_percent: None,
         error_per_band_percent: Vec::new(),
         max_abs_difference: None,
+        worst_polygons: Vec::new(),
     };
     match a.method {
         Method::Hr => {
@@ -263,6 +265,7 @@ pub fn run(a: Args) -> Result<()> {
             "error {:.4} % (L2, area-weighted, of the reference's largest radiosity {:.6} W/m^2) over {} polygons\n",
             c.error_percent, c.reference_max, c.polygons
         ))?;
+        super::print_out(&c.worst_lines(&scene.band_names))?;
     }
     if let Some(path) = &a.stats {
         report.write_json(path)?;

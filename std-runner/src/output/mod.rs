@@ -29,7 +29,7 @@ pub use outputs::Outputs;
 pub use png_file::{tone_map, write_png};
 pub use progress::Progress;
 pub use raster::Rasterizer;
-pub use reference::{CompareError, Comparison, ReferenceSink, compare};
+pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compare};
 pub use results::{ResultsFile, ResultsTable, ResultsWriter};
 pub use results_read::{TableError, read_results, read_results_file};
 pub use stats::SolveReport;

@@ -8,14 +8,46 @@
 //! both tables have back columns (then one-sided polygons count with their back at 0 on both
 //! sides). The areas `A_i` are the reference's. Sums run in f64 in id order, so the result
 //! is deterministic.
+//!
+//! Beside the global measure, the comparison names the [`WORST_COUNT`] polygons with the
+//! largest relative error: a polygon's relative error is the largest `|B_ic - R_ic| / R_ic`
+//! over the compared columns whose reference value is at least [`RELATIVE_FLOOR`] times the
+//! reference's largest radiosity (darker columns, where the ratio says nothing, are left out).
+//! Ties go to the lower id, then to the first column (front before back, bands in order).
 
 use super::results::ResultsTable;
+use crate::numbers::short;
 use hirad_core::sink::{PolygonResult, Sink};
-use std::fmt;
+use serde::{Deserialize, Serialize};
+use std::fmt::{self, Write as _};
 
 /// Largest relative difference between a polygon's area in the results and in the reference
 /// before the two are declared different scenes.
 pub const AREA_TOLERANCE: f64 = 1e-3;
+
+/// Relative errors are taken only where the reference is at least this fraction of its
+/// largest radiosity (0.1%): black or unlit polygons would otherwise dominate with 0/0.
+pub const RELATIVE_FLOOR: f64 = 1e-3;
+
+/// Number of polygons [`Comparison::worst`] lists.
+pub const WORST_COUNT: usize = 5;
+
+/// A polygon with one of the largest relative errors, at its worst column.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WorstPolygon {
+    /// Global id.
+    pub id: u64,
+    /// Band index of the worst column.
+    pub band: usize,
+    /// True when the worst column is the back side's.
+    pub back: bool,
+    /// The reference's radiosity there (W/m^2), as in its table.
+    pub reference: f32,
+    /// The result's radiosity there (W/m^2).
+    pub result: f32,
+    /// `100 * (result - reference) / reference`.
+    pub relative_error_percent: f64,
+}
 
 /// How far a solution is from the reference.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,6 +65,46 @@ pub struct Comparison {
     pub polygons: u64,
     /// True when back-side radiosity was compared too.
     pub back_compared: bool,
+    /// The [`WORST_COUNT`] polygons with the largest relative error (fewer when fewer have a
+    /// column above the floor), largest first, ties by id.
+    pub worst: Vec<WorstPolygon>,
+    /// Reference values below this (W/m^2), [`RELATIVE_FLOOR`] times
+    /// [`Comparison::reference_max`], have no relative error.
+    pub relative_floor: f64,
+}
+
+impl Comparison {
+    /// The worst polygons for people: a heading naming the floor, then one line per polygon,
+    /// e.g. `  id 17 back band 1 (nir): reference 0.02618 W/m^2, got 0.02795, +6.76 %`.
+    /// `band_names` are the scene's (may be empty).
+    pub fn worst_lines(&self, band_names: &[String]) -> String {
+        let mut out = format!(
+            "worst polygons (relative error of radiosity, where the reference is at least {}% of \
+             its largest, {} W/m^2):\n",
+            short(100.0 * RELATIVE_FLOOR),
+            short(self.relative_floor)
+        );
+        if self.worst.is_empty() {
+            out.push_str("  none\n");
+        }
+        for w in &self.worst {
+            let side = if w.back { "back" } else { "front" };
+            let name = match band_names.get(w.band) {
+                Some(n) => format!(" ({n})"),
+                None => String::new(),
+            };
+            let _ = writeln!(
+                out,
+                "  id {} {side} band {}{name}: reference {} W/m^2, got {}, {:+.2} %",
+                w.id,
+                w.band,
+                short(f64::from(w.reference)),
+                short(f64::from(w.result)),
+                w.relative_error_percent
+            );
+        }
+        out
+    }
 }
 
 /// Why two tables cannot be compared.
@@ -60,10 +132,35 @@ struct Accumulator {
     max_abs: f64,
     max_ref: f64,
     polygons: u64,
+    /// Reference values below this have no relative error (W/m^2).
+    floor: f64,
+    /// The worst polygons so far, in report order.
+    worst: Vec<WorstPolygon>,
+}
+
+/// The reference's largest radiosity over the compared columns (front, and back when
+/// `back`); the relative-error floor is [`RELATIVE_FLOOR`] times it.
+fn reference_max(reference: &ResultsTable, back: bool) -> f64 {
+    let sides = if back { 2 } else { 1 };
+    reference.radiosity[..sides]
+        .iter()
+        .flatten()
+        .map(|&v| f64::from(v))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Report order: larger relative error first, then lower id.
+fn worse(a: &WorstPolygon, b: &WorstPolygon) -> std::cmp::Ordering {
+    b.relative_error_percent
+        .abs()
+        .total_cmp(&a.relative_error_percent.abs())
+        .then(a.id.cmp(&b.id))
 }
 
 impl Accumulator {
-    fn new(bands: usize, back: bool) -> Self {
+    /// Sums for `bands` bands, with back sides when `back`; `reference_max` is the
+    /// reference's largest radiosity over the compared columns (for the relative floor).
+    fn new(bands: usize, back: bool, reference_max: f64) -> Self {
         Accumulator {
             sides: if back { 2 } else { 1 },
             area: 0.0,
@@ -71,15 +168,18 @@ impl Accumulator {
             max_abs: 0.0,
             max_ref: f64::NEG_INFINITY,
             polygons: 0,
+            floor: RELATIVE_FLOOR * reference_max,
+            worst: Vec::with_capacity(WORST_COUNT + 1),
         }
     }
 
-    /// Adds one polygon: reference area, result and reference radiosity per side (an empty
+    /// Adds polygon `id`: reference area, result and reference radiosity per side (an empty
     /// slice stands for zeros).
-    fn add(&mut self, area: f32, result: [&[f32]; 2], reference: [&[f32]; 2]) {
+    fn add(&mut self, id: u64, area: f32, result: [&[f32]; 2], reference: [&[f32]; 2]) {
         let area = f64::from(area);
         self.area += area;
         self.polygons += 1;
+        let mut worst: Option<WorstPolygon> = None;
         for side in 0..self.sides {
             for (b, sum) in self.squares.iter_mut().enumerate() {
                 let got = f64::from(result[side].get(b).copied().unwrap_or(0.0));
@@ -88,6 +188,30 @@ impl Accumulator {
                 *sum += area * d * d;
                 self.max_abs = self.max_abs.max(d.abs());
                 self.max_ref = self.max_ref.max(want);
+                if want > 0.0 && want >= self.floor {
+                    let percent = 100.0 * d / want;
+                    if worst
+                        .as_ref()
+                        .is_none_or(|w| percent.abs() > w.relative_error_percent.abs())
+                    {
+                        worst = Some(WorstPolygon {
+                            id,
+                            band: b,
+                            back: side == 1,
+                            // Both came from f32: exact.
+                            reference: want as f32,
+                            result: got as f32,
+                            relative_error_percent: percent,
+                        });
+                    }
+                }
+            }
+        }
+        if let Some(w) = worst.filter(|w| w.relative_error_percent.is_finite()) {
+            let at = self.worst.partition_point(|k| worse(k, &w).is_lt());
+            if at < WORST_COUNT {
+                self.worst.insert(at, w);
+                self.worst.truncate(WORST_COUNT);
             }
         }
     }
@@ -118,6 +242,8 @@ impl Accumulator {
             reference_max: self.max_ref,
             polygons: self.polygons,
             back_compared: self.sides == 2,
+            worst: self.worst,
+            relative_floor: self.floor,
         })
     }
 }
@@ -173,10 +299,11 @@ pub fn compare(
         ));
     }
     let back = result.two_sided && reference.two_sided;
-    let mut acc = Accumulator::new(reference.bands, back);
+    let mut acc = Accumulator::new(reference.bands, back, reference_max(reference, back));
     for row in 0..reference.len() {
         check_row(row, result.ids[row], result.areas[row], reference)?;
         acc.add(
+            reference.ids[row],
             reference.areas[row],
             [result.radiosity(row, 0), result.radiosity(row, 1)],
             [reference.radiosity(row, 0), reference.radiosity(row, 1)],
@@ -208,7 +335,8 @@ impl ReferenceSink {
         two_sided: bool,
     ) -> Result<Self, CompareError> {
         check_bands(bands, &reference)?;
-        let acc = Accumulator::new(bands, two_sided && reference.two_sided);
+        let back = two_sided && reference.two_sided;
+        let acc = Accumulator::new(bands, back, reference_max(&reference, back));
         Ok(ReferenceSink {
             reference,
             seen: 0,
@@ -261,6 +389,7 @@ impl ReferenceSink {
         }
         let r = &self.reference;
         self.acc.add(
+            p.id,
             r.areas[row],
             p.radiosity,
             [r.radiosity(row, 0), r.radiosity(row, 1)],

@@ -1,7 +1,7 @@
 //! What a solve did and what it cost (design principle 6): the `--stats` JSON object and the
 //! summary printed on stderr after every run.
 
-use super::reference::Comparison;
+use super::reference::{Comparison, WorstPolygon};
 use crate::files::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::io::{self, Write};
@@ -44,6 +44,11 @@ pub struct SolveReport {
     /// Largest absolute radiosity difference from the reference (W/m^2); `null` without one.
     #[serde(default)]
     pub max_abs_difference: Option<f64>,
+    /// The polygons with the largest relative radiosity error against the reference, largest
+    /// first (see [`super::reference`]: only columns whose reference value is at least 0.1%
+    /// of its largest count); empty without a reference.
+    #[serde(default)]
+    pub worst_polygons: Vec<WorstPolygon>,
 }
 
 impl SolveReport {
@@ -52,6 +57,7 @@ impl SolveReport {
         self.error_percent = Some(c.error_percent);
         self.error_per_band_percent = c.per_band_percent.clone();
         self.max_abs_difference = Some(c.max_abs_difference);
+        self.worst_polygons = c.worst.clone();
     }
 
     /// The report as one pretty-printed JSON object.

@@ -1,6 +1,6 @@
 //! The reference measure on hand-computed cases, its refusals, and the streaming sink.
 
-use super::reference::{ReferenceSink, compare};
+use super::reference::{RELATIVE_FLOOR, ReferenceSink, WorstPolygon, compare};
 use super::results::ResultsTable;
 use hirad_core::sink::{PolygonResult, Sink};
 
@@ -159,4 +159,135 @@ fn streaming_sink_matches_the_table_comparison() {
     }
     let e = wrong.finish().unwrap_err().to_string();
     assert!(e.contains("row 2: polygon 4"), "{e}");
+}
+
+/// Ids and signed percentages of the worst polygons.
+fn worst_of(result: &ResultsTable, reference: &ResultsTable) -> Vec<(u64, usize, bool, f64)> {
+    compare(result, reference)
+        .unwrap()
+        .worst
+        .iter()
+        .map(|w| (w.id, w.band, w.back, w.relative_error_percent))
+        .collect()
+}
+
+#[test]
+fn worst_polygons_by_relative_error() {
+    // Reference max 100, so the floor is 0.1 W/m^2.
+    let reference = table(
+        2,
+        &[
+            (0, 1.0, &[100.0, 50.0]),
+            (1, 1.0, &[10.0, 10.0]),
+            (2, 1.0, &[1.0, 0.05]),
+            (3, 1.0, &[20.0, 20.0]),
+            (4, 1.0, &[4.0, 4.0]),
+            (5, 1.0, &[0.0, 0.0]),
+            (6, 1.0, &[8.0, 8.0]),
+            (7, 1.0, &[10.0, 10.0]),
+            (8, 1.0, &[0.2, 2.0]),
+        ],
+    );
+    let result = table(
+        2,
+        &[
+            // -1 %: sixth, not listed.
+            (0, 1.0, &[99.0, 50.0]),
+            // +20 % in band 1 beats -10 % in band 0.
+            (1, 1.0, &[9.0, 12.0]),
+            // Band 1 is below the floor (0.05 < 0.1): its +1900 % does not count; band 0 +5 %.
+            (2, 1.0, &[1.05, 1.0]),
+            // -20 %: ties with polygon 1 (|20 %|), listed after it (higher id).
+            (3, 1.0, &[16.0, 20.0]),
+            // +50 %: the worst.
+            (4, 1.0, &[6.0, 4.0]),
+            // A black reference (0/0): never listed, whatever the result.
+            (5, 1.0, &[3.0, 3.0]),
+            // Exact: 0 %.
+            (6, 1.0, &[8.0, 8.0]),
+            // -20 % in band 0 and +20 % in band 1: the first column wins the tie.
+            (7, 1.0, &[8.0, 12.0]),
+            // Band 0 at 0.2 is above the floor: -25 %.
+            (8, 1.0, &[0.15, 2.0]),
+        ],
+    );
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-4;
+    let got = worst_of(&result, &reference);
+    let want = [
+        (4, 0, false, 50.0),
+        (8, 0, false, -25.0),
+        (1, 1, false, 20.0),
+        (3, 0, false, -20.0),
+        (7, 0, false, -20.0),
+    ];
+    assert_eq!(got.len(), 5, "{got:?}");
+    for (g, w) in got.iter().zip(&want) {
+        assert!(
+            g.0 == w.0 && g.1 == w.1 && g.2 == w.2 && close(g.3, w.3),
+            "{got:?}"
+        );
+    }
+    let c = compare(&result, &reference).unwrap();
+    assert_eq!(c.relative_floor, RELATIVE_FLOOR * 100.0);
+    assert_eq!(
+        c.worst[0],
+        WorstPolygon {
+            id: 4,
+            band: 0,
+            back: false,
+            reference: 4.0,
+            result: 6.0,
+            relative_error_percent: 50.0,
+        }
+    );
+    // Fewer polygons than five: all of those above the floor are listed.
+    let small = table(1, &[(0, 1.0, &[2.0]), (1, 1.0, &[0.0])]);
+    let off = table(1, &[(0, 1.0, &[1.0]), (1, 1.0, &[5.0])]);
+    assert_eq!(worst_of(&off, &small), [(0, 0, false, -50.0)]);
+}
+
+#[test]
+fn worst_polygons_name_the_back_side() {
+    // Front equal, back 10 % high; a one-sided result compares fronts only.
+    let c = compare(&two_sided(2.0, 4.4), &two_sided(2.0, 4.0)).unwrap();
+    assert_eq!(c.worst.len(), 1);
+    let w = &c.worst[0];
+    assert!((w.id, w.band, w.back) == (0, 0, true), "{w:?}");
+    assert!((w.relative_error_percent - 10.0).abs() < 1e-4, "{w:?}");
+    let one = table(1, &[(0, 1.0, &[2.0])]);
+    let c = compare(&one, &two_sided(2.0, 8.0)).unwrap();
+    assert!(!c.worst[0].back);
+    assert_eq!(c.worst[0].relative_error_percent, 0.0);
+}
+
+#[test]
+fn worst_polygons_print_with_the_floor() {
+    let mut reference = ResultsTable::new(2, true);
+    let mut result = ResultsTable::new(2, true);
+    for (id, front, back, got_back) in [
+        (3u64, [20.0, 1.0], [0.5, 0.1], [0.5, 0.1]),
+        (17, [1.0, 1.0], [0.5, 0.02618], [0.5, 0.02795]),
+    ] {
+        for (t, b) in [(&mut reference, back), (&mut result, got_back)] {
+            t.ids.push(id);
+            t.areas.push(1.0);
+            t.radiosity[0].extend_from_slice(&front);
+            t.radiosity[1].extend_from_slice(&b);
+            t.irradiance[0].extend_from_slice(&[0.0, 0.0]);
+            t.irradiance[1].extend_from_slice(&[0.0, 0.0]);
+        }
+    }
+    let c = compare(&result, &reference).unwrap();
+    let names = ["par".to_string(), "nir".to_string()];
+    assert_eq!(
+        c.worst_lines(&names),
+        "worst polygons (relative error of radiosity, where the reference is at least 0.1% of \
+         its largest, 0.02 W/m^2):\n  \
+         id 17 back band 1 (nir): reference 0.02618 W/m^2, got 0.02795, +6.76 %\n  \
+         id 3 front band 0 (par): reference 20 W/m^2, got 20, +0.00 %\n"
+    );
+    assert!(
+        c.worst_lines(&[])
+            .contains("  id 17 back band 1: reference")
+    );
 }

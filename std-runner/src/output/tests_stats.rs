@@ -1,6 +1,6 @@
 //! The stats report: JSON round trip with every field, and the summary text.
 
-use super::reference::Comparison;
+use super::reference::{Comparison, WorstPolygon};
 use super::stats::{SolveReport, bytes};
 
 fn report() -> SolveReport {
@@ -20,6 +20,7 @@ fn report() -> SolveReport {
         error_percent: None,
         error_per_band_percent: Vec::new(),
         max_abs_difference: None,
+        worst_polygons: Vec::new(),
     }
 }
 
@@ -43,6 +44,7 @@ fn json_round_trip_holds_every_field() {
         "error_percent",
         "error_per_band_percent",
         "max_abs_difference",
+        "worst_polygons",
     ] {
         assert!(
             text.contains(&format!("\"{field}\":")),
@@ -59,10 +61,31 @@ fn json_round_trip_holds_every_field() {
         reference_max: 10.0,
         polygons: 17,
         back_compared: false,
+        worst: vec![WorstPolygon {
+            id: 17,
+            band: 1,
+            back: true,
+            reference: 0.02618,
+            result: 0.02795,
+            relative_error_percent: 6.76,
+        }],
+        relative_floor: 0.01,
     });
     let text = r.to_json();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(v["error_percent"], 1.25);
+    let w = &v["worst_polygons"][0];
+    assert_eq!(w["id"], 17);
+    assert_eq!(w["band"], 1);
+    assert_eq!(w["back"], true);
+    assert_eq!(w["reference"], 0.02618);
+    assert_eq!(w["result"], 0.02795);
+    assert_eq!(w["relative_error_percent"], 6.76);
+    // JSON written before the field existed still parses (to an empty list).
+    let mut old: serde_json::Value = serde_json::from_str(&text).unwrap();
+    old.as_object_mut().unwrap().remove("worst_polygons");
+    let back = SolveReport::from_json(&old.to_string()).unwrap();
+    assert!(back.worst_polygons.is_empty());
     assert_eq!(v["links"], 56789);
     assert_eq!(v["budget_limited"], true);
     assert_eq!(SolveReport::from_json(&text).unwrap(), r);
