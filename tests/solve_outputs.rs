@@ -222,6 +222,7 @@ fn reference_error_and_stats() {
         error_per_band_percent: Vec::new(),
         max_abs_difference: None,
         worst_polygons: Vec::new(),
+        ..SolveReport::default()
     };
     report.set_comparison(&got);
     let dir = tempfile::tempdir().unwrap();

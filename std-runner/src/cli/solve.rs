@@ -75,6 +75,10 @@ pub struct Args {
     /// Convergence tolerance, relative to the largest radiosity.
     #[arg(long, default_value_t = Settings::default().tolerance)]
     pub tolerance: f32,
+    /// Most gather / push-pull iterations per solution (hr). A solution that reaches it
+    /// before meeting the tolerance is reported as not converged and the run fails.
+    #[arg(long, default_value_t = Settings::default().max_iterations)]
+    pub max_iterations: u32,
     /// Element budget of the exact solver (its matrix grows as the square).
     #[arg(long, default_value_t = ExactSettings::default().max_elements)]
     pub elements: usize,
@@ -119,6 +123,9 @@ pub fn run(a: Args) -> Result<()> {
     }
     if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
         bail!("--tolerance must be a positive number, got {}", a.tolerance);
+    }
+    if a.max_iterations == 0 {
+        bail!("--max-iterations must be at least 1");
     }
     if a.rays == 0 || a.rays > 1024 {
         bail!("--rays must lie in 1..=1024, got {}", a.rays);
@@ -203,6 +210,7 @@ pub fn run(a: Args) -> Result<()> {
         error_per_band_percent: Vec::new(),
         max_abs_difference: None,
         worst_polygons: Vec::new(),
+        ..SolveReport::default()
     };
     match a.method {
         Method::Hr => {
@@ -211,6 +219,7 @@ pub fn run(a: Args) -> Result<()> {
                 rays: a.rays,
                 min_area: a.min_area,
                 tolerance: a.tolerance,
+                max_iterations: a.max_iterations,
                 ..Settings::default()
             };
             let run = solve::solve_hr(
@@ -232,9 +241,27 @@ pub fn run(a: Args) -> Result<()> {
             report.peak_workspace_bytes = s.peak_bytes;
             report.workspace_bytes = s.workspace_bytes;
             report.budget_limited = s.budget_limited;
-            if s.iteration_capped && !a.quiet {
-                eprintln!("warning: the solution stopped at the iteration cap before converging");
-            }
+            report.converged = s.converged;
+            report.remaining_change = Some(s.remaining_change as f64).filter(|r| r.is_finite());
+            report.power = (0..bands)
+                .map(|b| {
+                    let p = &s.balance;
+                    crate::output::BandPower {
+                        band: scene
+                            .band_names
+                            .get(b)
+                            .cloned()
+                            .unwrap_or_else(|| b.to_string()),
+                        emitted: p.emitted[b],
+                        direct: p.direct[b],
+                        absorbed: p.absorbed[b],
+                        absorbed_backs: p.absorbed_backs[b],
+                        escaped: p.escaped[b],
+                        imbalance: p.imbalance(b),
+                        imbalance_percent: 100.0 * p.relative_imbalance(b),
+                    }
+                })
+                .collect();
         }
         Method::Exact => {
             let settings = ExactSettings {
@@ -255,6 +282,8 @@ pub fn run(a: Args) -> Result<()> {
             report.iterations = r.iterations as u64;
             report.workspace_bytes = r.matrix_bytes;
             report.peak_workspace_bytes = r.matrix_bytes;
+            // The exact solver fails rather than return an unconverged solution.
+            report.converged = true;
         }
     }
     report.seconds = start.elapsed().as_secs_f64();
@@ -277,6 +306,18 @@ pub fn run(a: Args) -> Result<()> {
                 "note: the workspace budget limited refinement; give more --memory for the full accuracy of this epsilon"
             );
         }
+    }
+    if !report.converged {
+        bail!(
+            "the solution did not converge within {} iterations{}: the outputs were written but are not final (raise --tolerance, or check that the scene absorbs light)",
+            a.max_iterations,
+            report
+                .remaining_change
+                .map(|r| format!(
+                    " (estimated change still to come {r:.1e} of the largest radiosity)"
+                ))
+                .unwrap_or_default()
+        );
     }
     Ok(())
 }

@@ -7,8 +7,33 @@ use serde::{Deserialize, Serialize};
 use std::io::{self, Write};
 use std::path::Path;
 
+/// Where the power of one band went (W).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BandPower {
+    /// The band's name (or its index when the scene names none).
+    pub band: String,
+    /// Emitted by surfaces.
+    pub emitted: f64,
+    /// Direct light of suns and sky reaching surfaces.
+    pub direct: f64,
+    /// Absorbed by the receiving sides of surfaces.
+    pub absorbed: f64,
+    /// Absorbed by the backs of one-sided polygons (and inside closed objects).
+    pub absorbed_backs: f64,
+    /// Leaving the scene.
+    pub escaped: f64,
+    /// `emitted + direct - absorbed - absorbed_backs - escaped`.
+    pub imbalance: f64,
+    /// The imbalance in percent of what enters (`emitted + direct`).
+    pub imbalance_percent: f64,
+}
+
+fn yes() -> bool {
+    true
+}
+
 /// Settings, counts, time, memory and error of one solve.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SolveReport {
     /// Solver: `hr` (hierarchical with instantiation) or `exact`.
     pub method: String,
@@ -49,6 +74,17 @@ pub struct SolveReport {
     /// of its largest count); empty without a reference.
     #[serde(default)]
     pub worst_polygons: Vec<WorstPolygon>,
+    /// True when the solution met its tolerance; false when it stopped at the iteration cap
+    /// (the run then ends with an error after writing its outputs).
+    #[serde(default = "yes")]
+    pub converged: bool,
+    /// The estimated change still to come, relative to the largest radiosity (hr); `null`
+    /// when not estimated.
+    #[serde(default)]
+    pub remaining_change: Option<f64>,
+    /// Where the power went, per band (hr; empty for the exact solver).
+    #[serde(default)]
+    pub power: Vec<BandPower>,
 }
 
 impl SolveReport {
@@ -127,6 +163,41 @@ impl SolveReport {
                 writeln!(out)
             }
             None => writeln!(out, "  error: no reference given"),
+        }?;
+        if !self.power.is_empty() {
+            writeln!(
+                out,
+                "  power (W): in = emitted + direct light; out = absorbed (+ by backs) + escaped"
+            )?;
+            for p in &self.power {
+                writeln!(
+                    out,
+                    "    {}: in {:.6} (emitted {:.6}, direct {:.6}), absorbed {:.6} + {:.6} by backs, escaped {:.6}, imbalance {:+.3} %",
+                    p.band,
+                    p.emitted + p.direct,
+                    p.emitted,
+                    p.direct,
+                    p.absorbed,
+                    p.absorbed_backs,
+                    p.escaped,
+                    p.imbalance_percent
+                )?;
+            }
+        }
+        match (self.converged, self.remaining_change) {
+            (true, Some(r)) => writeln!(
+                out,
+                "  converged (estimated change still to come {r:.1e} of the largest radiosity)"
+            ),
+            (true, None) => Ok(()),
+            (false, r) => writeln!(
+                out,
+                "  NOT converged: the solution stopped at the iteration cap{}",
+                r.map(|r| format!(
+                    " (estimated change still to come {r:.1e} of the largest radiosity)"
+                ))
+                .unwrap_or_default()
+            ),
         }
     }
 }

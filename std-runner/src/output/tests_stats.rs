@@ -1,7 +1,7 @@
 //! The stats report: JSON round trip with every field, and the summary text.
 
 use super::reference::{Comparison, WorstPolygon};
-use super::stats::{SolveReport, bytes};
+use super::stats::{BandPower, SolveReport, bytes};
 
 fn report() -> SolveReport {
     SolveReport {
@@ -21,7 +21,32 @@ fn report() -> SolveReport {
         error_per_band_percent: Vec::new(),
         max_abs_difference: None,
         worst_polygons: Vec::new(),
+        converged: false,
+        remaining_change: Some(3e-4),
+        power: vec![BandPower {
+            band: "nir".into(),
+            emitted: 1.0,
+            direct: 2.0,
+            absorbed: 1.5,
+            absorbed_backs: 0.25,
+            escaped: 1.0,
+            imbalance: 0.25,
+            imbalance_percent: 8.333,
+        }],
     }
+}
+
+#[test]
+fn summary_tells_power_and_convergence() {
+    let mut text = Vec::new();
+    report().print_summary(&mut text).unwrap();
+    let text = String::from_utf8(text).unwrap();
+    assert!(text.contains("nir: in 3.000000 (emitted 1.000000, direct 2.000000), absorbed 1.500000 + 0.250000 by backs, escaped 1.000000, imbalance +8.333 %"), "{text}");
+    assert!(text.contains("NOT converged"), "{text}");
+    assert!(text.contains("3.0e-4"), "{text}");
+    // Old JSON without the new fields reads as converged, with no balance.
+    let old = SolveReport::from_json(r#"{"method":"hr","epsilon":0.001,"threads":1,"polygons":1,"elements":1,"links":1,"iterations":1,"refinement_passes":1,"seconds":0.1,"peak_workspace_bytes":1,"workspace_bytes":1,"budget_limited":false,"error_percent":null}"#).unwrap();
+    assert!(old.converged && old.power.is_empty() && old.remaining_change.is_none());
 }
 
 #[test]
@@ -45,6 +70,9 @@ fn json_round_trip_holds_every_field() {
         "error_per_band_percent",
         "max_abs_difference",
         "worst_polygons",
+        "converged",
+        "remaining_change",
+        "power",
     ] {
         assert!(
             text.contains(&format!("\"{field}\":")),
