@@ -2,8 +2,9 @@
 //!
 //! A source gives `E_perp` (W/m^2 per band) on a plane facing it; a side with unit normal
 //! `n` receives `E_perp * max(n . towards, 0)` where the ray from the point towards the source
-//! is not blocked. Per element and side: the quadrature average of that, one ray per point
-//! and source, cast to a point beyond the scene's bounding box.
+//! is not blocked. Per element and side: the quadrature average of that over the exposed
+//! points (buried ones have weight 0), one ray per point and source, cast to a point beyond
+//! the scene's bounding box.
 
 use super::mesh::Mesh;
 use super::quadrature::Quadrature;
@@ -36,6 +37,10 @@ pub fn direct<V: Visibility + ?Sized>(
             let mut rays = 0u64;
             for light in &lights {
                 for (&x, &w) in points.iter().zip(weights) {
+                    // Buried points (weight 0) receive nothing.
+                    if w == 0.0 {
+                        continue;
+                    }
                     let cos = el.normal.dot(light.towards);
                     // The front sees the source when cos > 0, a back side when cos < 0.
                     let side = if cos > 0.0 {

@@ -8,6 +8,11 @@
 //! two-sided element) and `V` is the fraction of jittered rays from `x_q` to `j` that pass.
 //! Sides that cannot emit (the back of a one-sided element) get no entry. Rays go through
 //! [`PairRays`], which may know a pair to be clear without casting any.
+//!
+//! Buried points of `i` have weight 0 and are skipped (the weights of the exposed ones sum
+//! to 1), so a row is the exposed part's form factors. Nothing is removed on the emitting
+//! side: `j`'s buried part lies behind the faces of the object it is buried in, so the rays
+//! to it are blocked, or behind the receiver's own plane, which the form factor clips away.
 
 use super::mesh::{Element, Mesh};
 use super::quadrature::Quadrature;
@@ -121,6 +126,10 @@ fn row<R: PairRays + ?Sized>(
         // Classified on the first point that needs rays.
         let mut pair = None;
         for (q, (&x, &w)) in points.iter().zip(weights).enumerate() {
+            // Buried points (weight 0) receive nothing.
+            if w == 0.0 {
+                continue;
+            }
             let Some(s) = facing_side(x, ej.corners[0], ej.normal) else {
                 continue;
             };

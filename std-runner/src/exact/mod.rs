@@ -10,14 +10,41 @@
 //!   times the fraction of deterministic jittered rays that reach the emitter, for both
 //!   sides of two-sided (translucent) materials;
 //! * suns and sky directions light every element directly, with shadow rays;
+//! * quadrature points buried inside closed objects (a floor under a box) are left out (see
+//!   below);
 //! * `B = E + rho H + tau H_other` is solved per band by Gauss-Seidel with a contraction-based
 //!   error estimate (closed scenes with rho = 0.99 converge slowly).
+//!
+//! **Buried points.** A floor polygon that runs on under a box (which has no bottom face) has
+//! elements straddling the box's footprint, and the part under the box receives no light. Its
+//! area mean would make such an element too dark for the part the box's faces see right beside
+//! them, at large form factors, and the faces would come out a few percent too dark,
+//! converging only slowly with the mesh. So a quadrature point of a one-sided element whose
+//! rays all meet the backs of one-sided polygons is *buried* (`buried`) and dropped from the
+//! element's quadrature:
+//!
+//! * an element receives the mean over its exposed points (weights renormalised; nothing when
+//!   all are buried), so its `H` and `B = E + rho H` are those of its exposed part;
+//! * as an emitter it gives a receiver `B` times the form factor to the whole element times
+//!   the visibility, unchanged: the buried part is hidden from every receiver by the faces
+//!   around it (rays to it are blocked) or lies behind the receiver's own plane (those faces
+//!   themselves, whose form factor clips it away), so what arrives is `B` times the form
+//!   factor to the exposed part, and the element's power is `B` times its exposed area
+//!   `f a` (`f` the exposed fraction, the plain weight of its exposed points). Scaling `B` by
+//!   `f` as well would remove the buried part twice. Whatever a buried part emits goes into
+//!   the object and is absorbed by the backs of its faces: no receiver sees it;
+//! * the results table counts buried parts as unlit (irradiance 0, radiosity `E`): a
+//!   polygon's means are `sum(a f H) / A` and `sum(a (f B + (1 - f) E)) / A`, the area means
+//!   a particle tracer measures.
+//!
+//! The hierarchical solver applies the same rule, so both converge to the same answer.
 //!
 //! Results are bit-identical for any thread count: rows are computed independently in
 //! parallel, each in a fixed order, and the iteration is sequential.
 //!
 //! Units: metres, W/m^2.
 
+mod buried;
 mod direct;
 mod error;
 mod matrix;
@@ -116,10 +143,12 @@ pub struct ExactReport {
     pub form_factors: u64,
     /// Non-zero form factors stored.
     pub entries: u64,
-    /// Visibility rays cast (form factors and direct light).
+    /// Visibility rays cast (form factors, direct light and the buried test).
     pub rays: u64,
     /// Element pairs known unoccluded without rays (no other polygon reaches their box).
     pub clear_pairs: u64,
+    /// Receiver quadrature points found buried inside closed objects (left out).
+    pub buried_points: u64,
     /// Gauss-Seidel sweeps.
     pub iterations: u32,
     /// Estimated remaining error relative to the largest radiosity.
@@ -178,7 +207,7 @@ pub fn solve_exact_obvhs<S: Sink>(
 }
 
 /// The solve proper, after the mesh exists: `rays` for the form factors, `visibility` for
-/// the direct light (the same polygons).
+/// the buried points and the direct light (the same polygons).
 fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
     scene: &Scene,
     settings: &ExactSettings,
@@ -196,7 +225,8 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
             limit: MAX_MATRIX_BYTES,
         });
     }
-    let quad = Quadrature::new(mesh, settings.quadrature_split);
+    let mut quad = Quadrature::new(mesh, settings.quadrature_split);
+    let exposure = buried::bury(scene, mesh, &mut quad, visibility);
     let matrix_start = Instant::now();
     let m = matrix::build(mesh, &quad, settings.rays, rays);
     let matrix_seconds = matrix_start.elapsed().as_secs_f64();
@@ -210,15 +240,16 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
         settings.max_iterations,
     )
     .map_err(|(iterations, error)| ExactError::NotConverged { iterations, error })?;
-    output::emit(scene.bands as usize, mesh, &solution, sink).map_err(ExactError::Sink)?;
+    output::emit(scene, mesh, &solution, &exposure.exposed, sink).map_err(ExactError::Sink)?;
     Ok(ExactReport {
         polygons: mesh.polygons.len(),
         elements: mesh.elements.len(),
         slots: mesh.slots,
         form_factors: m.pairs,
         entries: m.entries(),
-        rays: m.rays + direct_rays,
+        rays: m.rays + direct_rays + exposure.rays,
         clear_pairs: m.clear_pairs,
+        buried_points: exposure.buried_points,
         iterations: solution.iterations,
         error: solution.error,
         seconds: start.elapsed().as_secs_f64(),
@@ -229,3 +260,5 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_contact;

@@ -7,7 +7,8 @@ use super::mesh::{Mesh, area_of};
 use glam::Vec3;
 use hirad_core::sampling::{MAX_QUADRATURE, quadrature, subdivide};
 
-/// Quadrature points and weights (summing to 1 per element) of every element, flattened.
+/// Quadrature points and weights (summing to 1 per element, or all 0 for an element whose
+/// points are all buried) of every element, flattened.
 #[derive(Clone, Debug)]
 pub struct Quadrature {
     points: Vec<Vec3>,
@@ -55,7 +56,33 @@ impl Quadrature {
         }
     }
 
-    /// Points and weights of element `e`.
+    /// Leaves the points of element `e` marked in `buried` out of its rule: their weights
+    /// become 0 and the others' are scaled to sum to 1 (all 0 when every point is buried).
+    /// Returns the exposed fraction: the sum of the exposed points' weights before scaling.
+    pub fn restrict(&mut self, e: usize, buried: &[bool]) -> f64 {
+        let weights = &mut self.weights[self.offsets[e]..self.offsets[e + 1]];
+        if !buried.iter().any(|&b| b) {
+            return 1.0;
+        }
+        let mut exposed = 0.0f64;
+        for (w, &b) in weights.iter_mut().zip(buried) {
+            if b {
+                *w = 0.0;
+            } else {
+                exposed += *w as f64;
+            }
+        }
+        for w in weights.iter_mut() {
+            *w = if exposed > 0.0 {
+                (*w as f64 / exposed) as f32
+            } else {
+                0.0
+            };
+        }
+        exposed.clamp(0.0, 1.0)
+    }
+
+    /// Points and weights of element `e` (a buried point's weight is 0).
     pub fn of(&self, e: usize) -> (&[Vec3], &[f32]) {
         let r = self.offsets[e]..self.offsets[e + 1];
         (&self.points[r.clone()], &self.weights[r])

@@ -9,13 +9,13 @@ use std::convert::Infallible;
 
 /// One polygon's results, as the sink received them.
 #[derive(Clone, Debug, PartialEq)]
-struct Got {
-    area: f32,
-    two_sided: bool,
-    radiosity: [Vec<f32>; 2],
-    irradiance: [Vec<f32>; 2],
+pub(super) struct Got {
+    pub area: f32,
+    pub two_sided: bool,
+    pub radiosity: [Vec<f32>; 2],
+    pub irradiance: [Vec<f32>; 2],
     /// Per patch: area and radiosity `[front, back]`.
-    patches: Vec<(f32, [Vec<f32>; 2])>,
+    pub patches: Vec<(f32, [Vec<f32>; 2])>,
 }
 
 /// Keeps everything, and checks the order of the calls.
@@ -74,13 +74,13 @@ fn square(c: &mut Cluster, x0: f32, y0: f32, s: f32, z: f32, up: bool, mat: u32)
         .push(crate::scene::quad(v[0], v[1], v[2], v[3], mat));
 }
 
-fn solve(scene: &Scene, settings: &ExactSettings) -> (Vec<Got>, ExactReport) {
+pub(super) fn solve(scene: &Scene, settings: &ExactSettings) -> (Vec<Got>, ExactReport) {
     let mut keep = Keep::default();
     let report = solve_exact_obvhs(scene, settings, &mut keep).unwrap();
     (keep.polygons, report)
 }
 
-fn small(max_elements: usize) -> ExactSettings {
+pub(super) fn small(max_elements: usize) -> ExactSettings {
     ExactSettings {
         max_elements,
         ..ExactSettings::default()
