@@ -53,6 +53,49 @@ pub fn point_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
     (sum.abs() / (2.0 * core::f32::consts::PI)).min(1.0)
 }
 
+/// What a whole convex polygon sends to the point `p`, unclipped (the polygon must lie on
+/// one side of every plane through `p` that matters to the caller): its solid angle (sr) and
+/// its vector form factor `phi = (1/2 pi) sum_i angle(r_i, r_i+1) normalize(r_i x r_i+1)`,
+/// oriented so that the irradiance on a plane of unit normal `n` facing all of the polygon
+/// is `B n . phi` for a polygon of radiosity B. `pi |phi| <= solid angle`, with equality
+/// only for a vanishing polygon: their ratio is how collimated its light is.
+pub fn point_polygon_light(p: Vec3, poly: &[Vec3]) -> (f32, Vec3) {
+    let m = poly.len().min(4);
+    if m < 3 {
+        return (0.0, Vec3::ZERO);
+    }
+    let mut phi = Vec3::ZERO;
+    for i in 0..m {
+        let (a, b) = (poly[i] - p, poly[(i + 1) % m] - p);
+        let c = a.cross(b);
+        let len = c.length();
+        if len <= 0.0 || !len.is_finite() {
+            continue;
+        }
+        phi += c * (angle(len, a.dot(b)) / len);
+    }
+    phi /= 2.0 * core::f32::consts::PI;
+    // Solid angle: a fan of triangles (Van Oosterom and Strackee).
+    let mut omega = 0.0f32;
+    let a = poly[0] - p;
+    for i in 1..m - 1 {
+        let (b, c) = (poly[i] - p, poly[i + 1] - p);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let num = a.dot(b.cross(c)).abs();
+        let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        let t = 2.0 * libm::atan2f(num, den);
+        if t.is_finite() {
+            omega += t.abs();
+        }
+    }
+    // The light arrives from the polygon: orient phi towards it.
+    let centre = poly[..m].iter().copied().sum::<Vec3>() / m as f32 - p;
+    if phi.dot(centre) < 0.0 {
+        phi = -phi;
+    }
+    (omega, phi)
+}
+
 /// The angle (0..=pi) whose sine and cosine are proportional to `y >= 0` and `x`: Cephes'
 /// single-precision arctangent (about 1e-7 relative) with its octant reductions, inline and
 /// branch-light. The solver's hottest function spends most of its time here.
@@ -272,6 +315,53 @@ mod tests {
         }
         assert!(worst < 4e-7, "{worst}");
         assert_eq!(angle(0.0, 0.0), 0.0);
+    }
+
+    #[test]
+    fn light_of_a_polygon_closes_the_sphere_and_matches_the_form_factor() {
+        // A point inside a cube sees its six faces: solid angles sum to 4 pi, and the vector
+        // form factors cancel.
+        let faces = [
+            [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+            [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
+            [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+            [v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+        ];
+        let p = v(0.3, 0.6, 0.45);
+        let (mut omega, mut phi) = (0.0, Vec3::ZERO);
+        for f in &faces {
+            let (o, ph) = point_polygon_light(p, f);
+            omega += o;
+            phi += ph;
+            // The form factor of a plane facing the whole face is n . phi.
+            let n = (f[0] + f[1] + f[2] + f[3]) / 4.0 - p;
+            let n = if n.x.abs() > n.y.abs().max(n.z.abs()) {
+                Vec3::new(n.x.signum(), 0., 0.)
+            } else if n.y.abs() > n.z.abs() {
+                Vec3::new(0., n.y.signum(), 0.)
+            } else {
+                Vec3::new(0., 0., n.z.signum())
+            };
+            let ff = point_polygon(p, n, f);
+            assert!((ff - n.dot(ph)).abs() < 1e-5, "{ff} vs {}", n.dot(ph));
+            assert!(core::f32::consts::PI * ph.length() <= o * (1.0 + 1e-5));
+        }
+        assert!(
+            (omega - 4.0 * core::f32::consts::PI).abs() < 1e-4,
+            "{omega}"
+        );
+        assert!(phi.length() < 1e-5, "{phi}");
+        // A small far polygon is nearly collimated: pi |phi| / omega near 1.
+        let tiny = [
+            v(0., 0., 10.),
+            v(0.01, 0., 10.),
+            v(0.01, 0.01, 10.),
+            v(0., 0.01, 10.),
+        ];
+        let (o, ph) = point_polygon_light(Vec3::ZERO, &tiny);
+        assert!((core::f32::consts::PI * ph.length() / o - 1.0).abs() < 1e-3);
     }
 
     #[test]

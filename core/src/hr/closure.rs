@@ -32,17 +32,11 @@ pub(crate) fn update<E: Executor>(
     progress: &mut dyn super::exec::Progress,
 ) {
     // Light leaves the scene somewhere: every factor stays 1.
-    for kind in [Kind::Patch1, Kind::Patch2] {
-        for i in 0..st.pool(kind).len {
-            let e = Elem::new(kind, i);
-            let p = st.patch(ws, e);
-            if (0..State::sides(e)).any(|side| !p.closed(side)) {
-                return;
-            }
-        }
+    if !st.closed {
+        return;
     }
     progress.report("closing (patches)", 0, 0);
-    super::solve::gather(st, ws, ex, true);
+    super::solve::gather(st, ws, ex, true, true);
     super::solve::push(st, ws);
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;

@@ -33,7 +33,7 @@ use glam::Vec3;
 /// exposed).
 const BURIED_RAYS: u32 = 8;
 /// Extra levels of adaptive subdivision of a grid cell for a sun.
-const SUN_DEPTH: u32 = 3;
+const SUN_DEPTH: u32 = 2;
 /// Most grid cells along a side of a patch.
 const MAX_CELLS: u32 = 8;
 
@@ -84,11 +84,7 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
                     let e = Elem::new(kind, i as u32);
                     let mut p = c.st.patch(c.ws, e);
                     let bits = o[0] as u32;
-                    p.shape = (p.shape
-                        & !(UNPREPARED | (0xF * BURIED) | (3 * CLOSED) | SEES_BACKS))
-                        | ((bits & 0xF) * BURIED)
-                        | (((bits >> 4) & 3) * CLOSED)
-                        | if bits & (1 << 6) != 0 { SEES_BACKS } else { 0 };
+                    p.shape = (p.shape & !(UNPREPARED | (0xF * BURIED))) | ((bits & 0xF) * BURIED);
                     p.exposed = o[1];
                     p.shadow = o[2];
                     c.st.set_patch(c.ws, e, &p);
@@ -159,18 +155,6 @@ fn prepare<V: Visibility + ?Sized>(
             bits |= 1 << q;
         } else {
             exposed += wts[q];
-        }
-    }
-    // Closed sides: no ray from any quadrature point leaves the scene.
-    for side in 0..State::sides(e) {
-        let n = if side == 0 { normal } else { -normal };
-        let seed = hash3(e.0, side as u32, 0xC105);
-        let (closed, backs) = is_closed(st, ws, &pts[..m], n, p.poly, seed, vis, &mut rays);
-        if closed {
-            bits |= 1 << (4 + side);
-        }
-        if backs {
-            bits |= 1 << 6;
         }
     }
     out[0] = bits as f32;
@@ -320,20 +304,61 @@ fn is_closed<V: Visibility + ?Sized>(
     (true, backs)
 }
 
+/// Whether the scene is closed: no ray from any input polygon's quadrature points (4
+/// stratified cosine-distributed directions each, every receiving side) leaves it; and
+/// whether one of those rays met the back of a one-sided polygon. Polygons are tested in
+/// order and the test stops at the first ray that leaves, so an open scene costs a few
+/// rays.
+pub(crate) fn test_closed<V: Visibility + ?Sized>(st: &mut State, ws: &[u8], vis: &Vis<'_, V>) {
+    let ray = Ray {
+        vis,
+        polys: WsPolygons { st, ws },
+    };
+    let mut backs = false;
+    let mut rays = 0u32;
+    for i in 0..st.polygons {
+        let rec = st.polygon(ws, i);
+        let e = Elem(rec.root);
+        let p = st.patch(ws, e);
+        let mut corners = [Vec3::ZERO; 4];
+        for (c, src) in corners.iter_mut().zip(p.corners) {
+            *c = src.into();
+        }
+        let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+        let m = quadrature(&corners[..p.corner_count()], &mut pts, &mut wts);
+        let normal = Vec3::from(rec.normal);
+        for side in 0..State::sides(e) {
+            let n = if side == 0 { normal } else { -normal };
+            let seed = hash3(e.0, side as u32, 0xC105);
+            let (closed, b) = is_closed(st, ws, &pts[..m], n, i, seed, &ray, &mut rays);
+            backs |= b;
+            if !closed {
+                st.closed = false;
+                st.sees_backs = backs;
+                st.stats.rays += rays as u64;
+                return;
+            }
+        }
+    }
+    st.closed = st.polygons > 0;
+    st.sees_backs = backs;
+    st.stats.rays += rays as u64;
+}
+
 /// A band in which the scene has no steady state: no ray from any patch leaves it, none met
 /// the back of a one-sided polygon, every material reflects or transmits all of that band
 /// on every side light can reach, and something emits in it. Light there would grow without
 /// bound.
 pub(crate) fn no_steady_state(st: &State, ws: &[u8]) -> Option<usize> {
+    if !st.closed || st.sees_backs {
+        return None;
+    }
     let mut emits = [false; 8];
     let mut lossy = [false; 8];
     for kind in [Kind::Patch1, Kind::Patch2] {
         for i in 0..st.pool(kind).len {
             let e = Elem::new(kind, i);
             let p = st.patch(ws, e);
-            if p.shape & SEES_BACKS != 0 || (0..State::sides(e)).any(|side| !p.closed(side)) {
-                return None;
-            }
             let m = st.material(ws, st.polygon(ws, p.poly).material);
             for b in 0..st.bands {
                 for side in 0..State::sides(e) {

@@ -10,10 +10,10 @@
 //! `A / (4 pi r^2)`), so that sums never blow up. Every sample point comes from a hash of the
 //! two elements, so a link's value never depends on when or on which thread it is computed.
 
-use super::ids::Elem;
+use super::ids::{Elem, Kind};
 use super::sample::point_in;
 use super::state::{Shape, State};
-use crate::formfactor::{facing_side, point_polygon};
+use crate::formfactor::{facing_side, point_polygon, point_polygon_light};
 use crate::limits::NONE;
 use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
 use crate::visibility::Visibility;
@@ -30,6 +30,10 @@ pub(crate) struct Coefficients {
     pub rays: u32,
     /// To a cluster: the light's mean direction over its flux density (see `Link::dir`).
     pub dir: Vec3,
+    /// From a small cluster: the coefficients are exact sums over its polygons, to be
+    /// multiplied by the mean radiosity of its polygons facing the receiver (see
+    /// `oriented::mean_facing`), not by its oriented emission.
+    pub exact: bool,
     /// To a patch: how much the coefficient varies over the patch (largest minus smallest
     /// value at its quadrature points, per receiving side, the larger side): the error of
     /// taking it as constant there.
@@ -88,7 +92,10 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
     let r = st.shape(ws, recv);
     let e = st.shape(ws, emit);
     let rays = st.settings.rays.max(1);
-    let mut out = Coefficients::default();
+    let mut out = Coefficients {
+        exact: small_cluster(st, ws, emit),
+        ..Coefficients::default()
+    };
     let seed = hash3(recv.0, emit.0, 0x11AD);
     match r {
         Shape::Patch {
@@ -280,6 +287,120 @@ fn reciprocal<V: Visibility + ?Sized>(
     }
 }
 
+/// Clusters of at most this many polygons are seen polygon by polygon (exactly) from a
+/// receiver; larger ones as a point-like volume.
+pub(crate) const SMALL_CLUSTER: u32 = 32;
+
+/// True for a cluster whose polygons links evaluate one by one.
+fn small_cluster(st: &State, ws: &[u8], e: Elem) -> bool {
+    e.kind() == Kind::Cluster && st.cluster(ws, e.index()).polygons <= SMALL_CLUSTER
+}
+
+/// The polygons of cluster `e` and the side of each that faces `x` (None: `x` in its plane
+/// or that side does not emit), through `f`.
+fn each_facing(st: &State, ws: &[u8], e: Elem, x: Vec3, mut f: impl FnMut(&[Vec3])) {
+    let c = st.cluster(ws, e.index());
+    for k in c.first_polygon..c.first_polygon + c.polygons {
+        let poly = st.ordered(ws, k);
+        let rec = st.polygon(ws, poly);
+        let root = Elem(rec.root);
+        let p = st.patch(ws, root);
+        let n = p.corner_count();
+        let mut corners = [Vec3::ZERO; 4];
+        for (c, src) in corners.iter_mut().zip(p.corners) {
+            *c = src.into();
+        }
+        let Some(side) = facing_side(x, corners[0], Vec3::from(rec.normal)) else {
+            continue;
+        };
+        if side >= State::sides(root) {
+            continue;
+        }
+        f(&corners[..n]);
+    }
+}
+
+/// The exact form factor from a point (normal `nr`) to the polygons of a cluster that face
+/// it.
+fn cluster_form_factor(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: Vec3) -> f32 {
+    let mut sum = 0.0f32;
+    each_facing(st, ws, e, x, |c| sum += point_polygon(x, nr, c));
+    sum.min(1.0)
+}
+
+/// Solid angle and vector form factor at `x` of the polygons of a cluster that face it.
+fn cluster_light(st: &State, ws: &[u8], e: Elem, x: Vec3) -> (f32, Vec3) {
+    let (mut omega, mut phi) = (0.0f32, Vec3::ZERO);
+    each_facing(st, ws, e, x, |c| {
+        let (o, p) = point_polygon_light(x, c);
+        omega += o;
+        phi += p;
+    });
+    (omega.min(4.0 * PI), phi)
+}
+
+/// True when `x` lies outside the box (so that the box's faces seen from it are a proper
+/// silhouette).
+fn outside(x: Vec3, min: Vec3, max: Vec3) -> bool {
+    x.cmplt(min).any() || x.cmpgt(max).any()
+}
+
+/// Area of the box's shadow along the unit direction `w` (m^2).
+fn box_projected_area(min: Vec3, max: Vec3, w: Vec3) -> f32 {
+    let d = max - min;
+    w.x.abs() * d.y * d.z + w.y.abs() * d.x * d.z + w.z.abs() * d.x * d.y
+}
+
+/// The faces of a box that face the outside point `x` (at most three), through `f`.
+fn box_faces(x: Vec3, min: Vec3, max: Vec3, mut f: impl FnMut(&[Vec3; 4])) {
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        if max[u] <= min[u] || max[v] <= min[v] {
+            continue;
+        }
+        let at = if x[axis] > max[axis] {
+            max[axis]
+        } else if x[axis] < min[axis] {
+            min[axis]
+        } else {
+            continue;
+        };
+        let mut corners = [Vec3::ZERO; 4];
+        for (k, (a, b)) in [
+            (min[u], min[v]),
+            (max[u], min[v]),
+            (max[u], max[v]),
+            (min[u], max[v]),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            corners[k][axis] = at;
+            corners[k][u] = a;
+            corners[k][v] = b;
+        }
+        f(&corners);
+    }
+}
+
+/// Form factor from a point (normal `n`) outside a box to the box's silhouette.
+fn box_form_factor(x: Vec3, n: Vec3, min: Vec3, max: Vec3) -> f32 {
+    let mut sum = 0.0f32;
+    box_faces(x, min, max, |c| sum += point_polygon(x, n, c));
+    sum.min(1.0)
+}
+
+/// Solid angle and vector form factor of a box's silhouette seen from an outside point.
+fn box_light(x: Vec3, min: Vec3, max: Vec3) -> (f32, Vec3) {
+    let (mut omega, mut phi) = (0.0f32, Vec3::ZERO);
+    box_faces(x, min, max, |c| {
+        let (o, p) = point_polygon_light(x, c);
+        omega += o;
+        phi += p;
+    });
+    (omega, phi)
+}
+
 /// Irradiance coefficient at point `x` (normal `nr`, on polygon `poly`) from the emitter:
 /// returns (visible coefficient, open coefficient, emitting side).
 #[allow(clippy::too_many_arguments)]
@@ -332,6 +453,45 @@ fn to_point<V: Visibility + ?Sized>(
             let v = if cast == 0 { 1.0 } else { seen / cast as f32 };
             out.partial |= v < 1.0;
             (f * v, f, s_side)
+        }
+        Shape::Cluster { area, .. } if small_cluster(st, ws, emit) => {
+            // Exact: the form factors of the cluster's polygons that face the point, times
+            // the visible fraction of rays into the cluster.
+            let open = cluster_form_factor(st, ws, emit, x, nr);
+            if open <= 0.0 {
+                return (0.0, 0.0, 0);
+            }
+            let _ = area;
+            let mut seen = 0.0f32;
+            for j in 0..rays {
+                let (y, py) = point_in(st, ws, emit, hash3(seed, j, 0xB7));
+                seen += vis.transmittance(x, y, [poly, py]);
+            }
+            out.rays += rays;
+            let v = seen / rays as f32;
+            out.partial |= v < 1.0;
+            (open * v, open, 0)
+        }
+        Shape::Cluster { area, min, max } if outside(x, min, max) => {
+            // The cluster as a volume of uniform radiance filling its box: its kernel is the
+            // box's form factor over its projected area (exact for a flat cluster such as a
+            // tiled soil, the point kernel far away, bounded close by).
+            let w = (x - (min + max) * 0.5).normalize_or_zero();
+            let projected = box_projected_area(min, max, w);
+            let ff = box_form_factor(x, nr, min, max);
+            if projected <= 0.0 || ff <= 0.0 {
+                return (0.0, 0.0, 0);
+            }
+            let open = area * ff / (4.0 * projected);
+            let mut seen = 0.0f32;
+            for j in 0..rays {
+                let (y, py) = point_in(st, ws, emit, hash3(seed, j, 0xB7));
+                seen += vis.transmittance(x, y, [poly, py]);
+            }
+            out.rays += rays;
+            let v = seen / rays as f32;
+            out.partial |= v < 1.0;
+            (open * v, open, 0)
         }
         Shape::Cluster { area, .. } => {
             let (mut sum, mut open) = (0.0f32, 0.0f32);
@@ -397,18 +557,45 @@ fn flux_at<V: Visibility + ?Sized>(
             if !emits(e, s_side) {
                 return (0.0, 0.0, s_side, 1.0, Vec3::ZERO);
             }
-            let (u, v) = unit2(seed);
-            let y = point_on(&corners[..n], u, v);
-            let d = x - y;
-            let d2 = d.length_squared();
-            if d2 <= 0.0 {
+            // Exact at the point: the polygon's solid angle gives its scalar irradiance per
+            // unit radiosity (omega / pi), its vector form factor the light's direction. (A
+            // kernel of the polygon shrunk to a point underrates a wide emitter close by:
+            // a soil quad under a stem gave it a fifth of its light.)
+            let (omega, phi) = point_polygon_light(x, &corners[..n]);
+            let f = omega / PI;
+            if f.is_nan() || f <= 0.0 {
                 return (0.0, 0.0, s_side, 1.0, Vec3::ZERO);
             }
-            let len = libm::sqrtf(d2);
-            let c = normal.dot(d).abs() / len;
-            let f = area * c / (PI * d2 + area);
+            let (u, v) = unit2(seed);
+            let y = point_on(&corners[..n], u, v);
             let vis = vis.transmittance(x, y, [px, ep]);
-            (f, f, s_side, vis, -d / len)
+            let _ = area;
+            (f, f, s_side, vis, phi / f)
+        }
+        Shape::Cluster { .. } if small_cluster(st, ws, emit) => {
+            // Exact: solid angles and vector form factors of the polygons facing the point.
+            let (omega, phi) = cluster_light(st, ws, emit, x);
+            let f = omega / PI;
+            if f.is_nan() || f <= 0.0 {
+                return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
+            }
+            let (y, py) = point_in(st, ws, emit, seed);
+            let v = vis.transmittance(x, y, [px, py]);
+            (f, f, 0, v, phi / f)
+        }
+        Shape::Cluster { area, min, max } if outside(x, min, max) => {
+            // As to a patch (see `to_point`), with the box's solid angle and vector form
+            // factor.
+            let w = (x - (min + max) * 0.5).normalize_or_zero();
+            let projected = box_projected_area(min, max, w);
+            let (omega, phi) = box_light(x, min, max);
+            if projected <= 0.0 || omega <= 0.0 {
+                return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
+            }
+            let f = area * omega / (4.0 * PI * projected);
+            let (y, py) = point_in(st, ws, emit, seed);
+            let v = vis.transmittance(x, y, [px, py]);
+            (f, f, 0, v, phi * (PI / omega))
         }
         Shape::Cluster { area, .. } => {
             let (y, py) = point_in(st, ws, emit, seed);

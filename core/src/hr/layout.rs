@@ -49,7 +49,9 @@ impl Strides {
             bands,
             direct: sources,
             polygon: core::mem::size_of::<Polygon>() + 16 * bands,
-            cluster: core::mem::size_of::<Cluster>() + 4 * bands,
+            cluster: core::mem::size_of::<Cluster>()
+                + 4 * bands
+                + 4 * super::oriented::summary_floats(bands),
             patch1: core::mem::size_of::<Patch>() + per_side,
             patch2: core::mem::size_of::<Patch>() + 2 * per_side,
             source: core::mem::size_of::<Source>() + 4 * bands,
@@ -61,7 +63,7 @@ impl Strides {
     /// Floats an evaluated link hands back: its coefficients, the open coefficient, the
     /// partial-visibility flag, the rays cast, the light's mean direction and the spread.
     pub(crate) fn eval_out(&self) -> usize {
-        self.link_k + 7
+        self.link_k + 8
     }
 
     /// Floats a gathered receiver hands back: irradiance per side and band.

@@ -83,6 +83,8 @@ pub(crate) fn load<S: SceneSource>(
         min_area: 0.0,
         far: 0.0,
         contraction: f32::INFINITY,
+        closed: false,
+        sees_backs: false,
         scene_min: Vec3::ZERO,
         scene_max: Vec3::ZERO,
         stats: Stats {

@@ -484,6 +484,7 @@ where
         scratch,
     };
     direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+    direct::test_closed(&mut st, ws, &vis);
     if let Some(band) = direct::no_steady_state(&st, ws) {
         return Err(HrError::NoSteadyState { band: band as u32 }.into());
     }

@@ -87,10 +87,56 @@ pub(crate) fn emission(st: &State, ws: &[u8], cluster: u32, w: Vec3, unit: bool,
     }
 }
 
+/// The mean radiosity (W/m^2 per band) of a cluster's polygons towards the unit direction
+/// `w`, each weighted by its exposed area times its cosine to `w` (on the side that faces
+/// it): what the exact form factors of a small cluster multiply.
+pub(crate) fn mean_facing(
+    st: &State,
+    ws: &[u8],
+    cluster: u32,
+    w: Vec3,
+    unit: bool,
+    out: &mut [f32],
+) {
+    out.fill(0.0);
+    let c = st.cluster(ws, cluster);
+    let mut weight = 0.0f32;
+    for k in c.first_polygon..c.first_polygon + c.polygons {
+        let poly = st.ordered(ws, k);
+        let rec = st.polygon(ws, poly);
+        let cos = Vec3::from(rec.normal).dot(w);
+        let (side, f) = if cos > 0.0 { (0, cos) } else { (1, -cos) };
+        let root = Elem(rec.root);
+        if f <= 0.0 || side >= State::sides(root) {
+            continue;
+        }
+        let p = st.patch(ws, root);
+        weight += f * p.area * p.exposed;
+        if unit {
+            continue;
+        }
+        for (o, v) in out.iter_mut().zip(st.polygon_power(ws, poly, side)) {
+            *o += f * v;
+        }
+    }
+    if weight > 0.0 {
+        if unit {
+            out.fill(1.0);
+        } else {
+            for o in out.iter_mut() {
+                *o /= weight;
+            }
+        }
+    }
+}
+
 /// The radiosity an emitter carries along a link towards `towards` (a point of the receiver)
 /// from its side `side`: a patch's own radiosity, a cluster's [`emission`] (side 0 only), a
 /// source's irradiance. `None` when that side emits nothing.
-/// With `unit`, every emitting side has radiosity 1 (see `closure`).
+/// With `unit`, every emitting side has radiosity 1 (see `closure`). With `exact` (a link
+/// whose coefficients sum a small cluster's form factors), a cluster gives the mean
+/// radiosity of its polygons that face `towards` ([`mean_facing`]).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn radiosity_towards(
     st: &State,
     ws: &[u8],
@@ -98,6 +144,7 @@ pub(crate) fn radiosity_towards(
     side: usize,
     towards: Vec3,
     unit: bool,
+    exact: bool,
     out: &mut [f32],
 ) -> bool {
     match emit.kind() {
@@ -106,7 +153,11 @@ pub(crate) fn radiosity_towards(
                 return false;
             }
             let w = (towards - centre(st, ws, emit)).normalize_or_zero();
-            emission(st, ws, emit.index(), w, unit, out);
+            if exact {
+                mean_facing(st, ws, emit.index(), w, unit, out);
+            } else {
+                emission(st, ws, emit.index(), w, unit, out);
+            }
             true
         }
         _ => match st.b(ws, emit, side) {
@@ -511,7 +562,16 @@ pub(crate) fn link_fluxes<E: Executor>(
                 for s in 0..kk.min(2) {
                     let coef = if kk == 1 { k[0] } else { k[s] };
                     if coef == 0.0
-                        || !radiosity_towards(c.st, c.ws, Elem(l.emit), s, at, unit, &mut b[..nb])
+                        || !radiosity_towards(
+                            c.st,
+                            c.ws,
+                            Elem(l.emit),
+                            s,
+                            at,
+                            unit,
+                            l.flags & super::records::EXACT != 0,
+                            &mut b[..nb],
+                        )
                     {
                         continue;
                     }
@@ -535,9 +595,105 @@ pub(crate) fn link_fluxes<E: Executor>(
     );
 }
 
-/// Every polygon's share of what its clusters receive: each link's flux density times the
-/// polygon's cosine towards the link's emitter, on the side facing it.
-pub(crate) fn distribute<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fallback<'_, E>) {
+/// Beams a cluster keeps apart in its summary; weaker light is merged into one cone.
+const BEAMS: usize = 4;
+
+/// Floats of a cluster's summary: the links of its [`BEAMS`] beams (indices, as bits), then
+/// the total of every link it and its ancestors receive: flux per band, and the sum of
+/// their direction vectors weighted by their flux summed over bands.
+pub(crate) const fn summary_floats(bands: usize) -> usize {
+    BEAMS + bands + 3
+}
+
+/// Every cluster's summary of the light that reaches its polygons through the links it and
+/// its ancestors receive: the [`BEAMS`] strongest links as they are, the rest merged into
+/// one equivalent cone (total minus beams). A polygon then takes its share of a handful of
+/// cones from its own cluster instead of one per link up its ancestry, which would cost
+/// tens of evaluations per polygon and iteration in a tree. Parents come before children,
+/// so one pass in cluster order carries every summary down.
+///
+/// With `select`, the beams are chosen anew (the strongest by their flux now); otherwise the
+/// choice of the last selection stands, so that within a solution the sharing is linear in
+/// the radiosities (a choice that changed from one iteration to the next would keep the
+/// solution from settling).
+fn summarize(st: &State, ws: &mut [u8], select: bool) {
+    let nb = st.bands;
+    let len = summary_floats(nb);
+    let mut sum = [0.0f32; 32];
+    let strength = |st: &State, ws: &[u8], i: u32| -> f32 {
+        if i == NONE {
+            return -1.0;
+        }
+        st.link_flux(ws, i).iter().sum()
+    };
+    for c_index in 0..st.clusters {
+        let c = st.cluster(ws, c_index);
+        let mut beams = [NONE; BEAMS];
+        if c.parent == NONE {
+            sum[..len].fill(0.0);
+            for b in sum[..BEAMS].iter_mut() {
+                *b = f32::from_bits(NONE);
+            }
+        } else {
+            sum[..len].copy_from_slice(st.summary(ws, c.parent));
+        }
+        if !select {
+            // Keep this cluster's own stored choice.
+            for (k, b) in beams.iter_mut().enumerate() {
+                *b = st.summary(ws, c_index)[k].to_bits();
+            }
+        } else {
+            for (k, b) in beams.iter_mut().enumerate() {
+                *b = sum[k].to_bits();
+            }
+        }
+        let mut cur = c.links;
+        while cur != NONE {
+            let l = st.link(ws, cur);
+            let index = cur;
+            cur = l.next;
+            if l.recv == l.emit {
+                continue;
+            }
+            let flux = st.link_flux(ws, index);
+            let weight: f32 = flux.iter().sum();
+            for (t, f) in sum[BEAMS..BEAMS + nb].iter_mut().zip(flux) {
+                *t += f;
+            }
+            for a in 0..3 {
+                sum[BEAMS + nb + a] += weight * l.dir[a];
+            }
+            if select {
+                let s_new = weight;
+                let (mut weakest, mut w) = (0usize, f32::INFINITY);
+                for (k, &b) in beams.iter().enumerate() {
+                    let sk = strength(st, ws, b);
+                    if sk < w {
+                        (weakest, w) = (k, sk);
+                    }
+                }
+                if s_new > w && s_new > 0.0 {
+                    beams[weakest] = index;
+                }
+            }
+        }
+        for (k, b) in beams.iter().enumerate() {
+            sum[k] = f32::from_bits(*b);
+        }
+        st.summary_mut(ws, c_index).copy_from_slice(&sum[..len]);
+    }
+}
+
+/// Every polygon's share of what its clusters receive: the light of each beam of its
+/// cluster's summary, as a plane of its orientation takes it from a cone of light (see
+/// [`cone_share`]), on each side.
+pub(crate) fn distribute<E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    ex: &mut Fallback<'_, E>,
+    select: bool,
+) {
+    summarize(st, ws, select);
     let n = st.polygons as usize;
     let nb = st.bands;
     let mut ctx = Ctx { st, ws };
@@ -566,47 +722,56 @@ pub(crate) fn distribute<E: Executor>(st: &mut State, ws: &mut [u8], ex: &mut Fa
     );
 }
 
-/// Polygon `poly`'s irradiance from its ancestor clusters' links, front then back (`out`
-/// holds 2 x bands, added to).
+/// Polygon `poly`'s irradiance from its cluster's summary, front then back (`out` holds
+/// 2 x bands, added to).
 fn share(st: &State, ws: &[u8], poly: u32, out: &mut [f32]) {
     let nb = st.bands;
     let rec = st.polygon(ws, poly);
     let normal = Vec3::from(rec.normal);
-    let mut cluster = Elem(st.patch(ws, Elem(rec.root)).parent);
-    // Clusters nest at most a few hundred deep; bound the walk anyway.
-    for _ in 0..4096 {
-        if cluster.kind() != Kind::Cluster {
-            break;
-        }
-        let c = st.cluster(ws, cluster.index());
-        let mut cur = c.links;
-        while cur != NONE {
-            let l = st.link(ws, cur);
-            if l.recv != l.emit {
-                let dir = Vec3::from(l.dir);
-                let collimation = dir.length();
-                let t = if collimation > 0.0 {
-                    normal.dot(dir) / collimation
-                } else {
-                    0.0
-                };
-                let shares = [cone_share(collimation, t), cone_share(collimation, -t)];
-                for (side, f) in shares.into_iter().enumerate() {
-                    if f > 0.0 {
-                        for (o, v) in out[side * nb..(side + 1) * nb]
-                            .iter_mut()
-                            .zip(st.link_flux(ws, cur))
-                        {
-                            *o += f * v;
-                        }
-                    }
+    let cluster = Elem(st.patch(ws, Elem(rec.root)).parent);
+    if cluster.kind() != Kind::Cluster {
+        return;
+    }
+    let sum = st.summary(ws, cluster.index());
+    let mut rest = [0.0f32; 8];
+    rest[..nb].copy_from_slice(&sum[BEAMS..BEAMS + nb]);
+    let mut rest_dir = Vec3::new(sum[BEAMS + nb], sum[BEAMS + nb + 1], sum[BEAMS + nb + 2]);
+    let add = |flux: &[f32], dir: Vec3, out: &mut [f32]| {
+        let collimation = dir.length().min(1.0);
+        let t = if collimation > 0.0 {
+            normal.dot(dir) / dir.length()
+        } else {
+            0.0
+        };
+        let shares = [cone_share(collimation, t), cone_share(collimation, -t)];
+        for (side, f) in shares.into_iter().enumerate() {
+            if f > 0.0 {
+                for (o, v) in out[side * nb..(side + 1) * nb].iter_mut().zip(flux) {
+                    *o += f * v;
                 }
             }
-            cur = l.next;
         }
-        if c.parent == NONE {
-            break;
+    };
+    for &b in &sum[..BEAMS] {
+        let index = b.to_bits();
+        if index == NONE {
+            continue;
         }
-        cluster = Elem::new(Kind::Cluster, c.parent);
+        let l = st.link(ws, index);
+        let flux = st.link_flux(ws, index);
+        let dir = Vec3::from(l.dir);
+        let weight: f32 = flux.iter().sum();
+        for (r, f) in rest[..nb].iter_mut().zip(flux) {
+            *r -= f;
+        }
+        rest_dir -= dir * weight;
+        add(flux, dir, out);
+    }
+    let weight: f32 = rest[..nb].iter().sum();
+    if weight > 0.0 {
+        for r in rest[..nb].iter_mut() {
+            *r = r.max(0.0);
+        }
+        add(&rest[..nb], rest_dir / weight, out);
     }
 }

@@ -55,11 +55,6 @@ impl Patch {
         self.shape & (BURIED << q) != 0
     }
 
-    /// True when no ray from side `side` leaves the scene (see `closure`).
-    pub(crate) fn closed(&self, side: usize) -> bool {
-        self.shape & (CLOSED << side.min(1)) != 0
-    }
-
     /// True when the patch's exposure and direct light wait to be computed.
     pub(crate) fn unprepared(&self) -> bool {
         self.shape & UNPREPARED != 0
@@ -159,10 +154,6 @@ pub(crate) const STALE: u32 = 1 << 16;
 pub(crate) const BURIED: u32 = 1 << 17;
 /// Patch `shape` bit: exposure and direct light not computed yet.
 pub(crate) const UNPREPARED: u32 = 1 << 21;
-/// Patch `shape` bits 22 (front) and 23 (back): no ray from that side leaves the scene.
-pub(crate) const CLOSED: u32 = 1 << 22;
-/// Patch `shape` bit 24: a ray from it met the back of a one-sided polygon.
-pub(crate) const SEES_BACKS: u32 = 1 << 24;
 
 /// The link's coefficients have not been computed yet.
 pub(crate) const PENDING: u32 = 1;
@@ -172,3 +163,5 @@ pub(crate) const EXAMINED: u32 = 2;
 pub(crate) const PARTIAL: u32 = 4;
 /// The record is on the free list.
 pub(crate) const FREE: u32 = 8;
+/// The emitter is a small cluster seen polygon by polygon (see `eval::SMALL_CLUSTER`).
+pub(crate) const EXACT: u32 = 16;

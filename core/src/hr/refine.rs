@@ -109,6 +109,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 o[kk + 2] = co.rays as f32;
                 o[kk + 3..kk + 6].copy_from_slice(&co.dir.to_array());
                 o[kk + 6] = co.spread;
+                o[kk + 7] = if co.exact { 1.0 } else { 0.0 };
             }
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
@@ -122,7 +123,9 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 l.k_open = o[kk];
                 l.dir = [o[kk + 3], o[kk + 4], o[kk + 5]];
                 l.spread = o[kk + 6];
-                l.flags = (l.flags & !PENDING) | if o[kk + 1] != 0.0 { PARTIAL } else { 0 };
+                l.flags = (l.flags & !(PENDING | EXACT))
+                    | if o[kk + 1] != 0.0 { PARTIAL } else { 0 }
+                    | if o[kk + 7] != 0.0 { EXACT } else { 0 };
                 c.st.set_link(c.ws, i as u32, &l);
                 c.st.stats.evaluations += 1;
                 c.st.stats.rays += o[kk + 2] as u64;
@@ -334,6 +337,10 @@ fn choose(st: &State, ws: &[u8], recv: Elem, emit: Elem, rs: &Shape, es: &Shape)
     }
 }
 
+/// How much further than far ones links with a cluster close by are refined (a fraction of
+/// the threshold).
+const NEAR_CLUSTER: f32 = 0.1;
+
 /// Whether and where to refine link `i` (receiver `recv` <- `emit`): `Some(true)` split the
 /// receiver, `Some(false)` the emitter, `None` keep it.
 ///
@@ -361,11 +368,25 @@ fn decide(
     let k_eff = if l.flags & PARTIAL != 0 { l.k_open } else { k };
     let b = b_max(st, ws, emit);
     let area = receiving_area(rs);
-    if b * k_eff * area <= threshold {
+    let transfer = b * k_eff * area;
+    if transfer <= threshold * NEAR_CLUSTER {
         return None;
     }
+    let (rr, re) = (radius(rs), radius(es));
+    let gap =
+        (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit)).length();
+    let near = gap < 2.0 * (rr + re);
     if !(recv.is_patch() && emit.is_patch()) {
+        // A cluster stands in for its parts as if they were all alike: close by, that is
+        // wrong by about the whole transfer (a soil cluster under a plant), so such links
+        // are refined ten times further than far ones.
+        if transfer <= threshold && !near {
+            return None;
+        }
         return choose(st, ws, recv, emit, rs, es);
+    }
+    if transfer <= threshold {
+        return None;
     }
     // A receiver with buried points is seen only in part: refine it like a shadow edge.
     let buried = recv.is_patch() && (0..4).any(|q| st.patch(ws, recv).buried(q));
@@ -381,10 +402,6 @@ fn decide(
         b * (l.spread + hidden) * area
     };
     let e_emit = k * b_spread(st, ws, emit) * area;
-    let (rr, re) = (radius(rs), radius(es));
-    let gap =
-        (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit)).length();
-    let near = gap < 2.0 * (rr + re);
     if !near && e_recv.max(e_emit) <= threshold {
         return None;
     }

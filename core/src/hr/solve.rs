@@ -57,7 +57,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     st.stats.iteration_capped = false;
     st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
-        gather(st, ws, ex, false);
+        gather(st, ws, ex, false, it == 0);
         push(st, ws);
         let jumped = extrapolate > 0.0;
         let (change, b_max) = pull_extrapolated(st, ws, extrapolate);
@@ -149,14 +149,18 @@ const WINDOW: usize = 8;
 ///
 /// With `unit`, every emitting side counts as radiosity 1: what each leaf then receives is
 /// the sum of its coefficients (see `closure`).
+///
+/// With `select`, clusters choose anew which links they share out apart (see
+/// `oriented::summarize`): the first gather of every solution.
 pub(crate) fn gather<E: Executor>(
     st: &mut State,
     ws: &mut [u8],
     ex: &mut Fallback<'_, E>,
     unit: bool,
+    select: bool,
 ) {
     super::oriented::link_fluxes(st, ws, ex, unit);
-    super::oriented::distribute(st, ws, ex);
+    super::oriented::distribute(st, ws, ex, select);
     let first = st.clusters as usize;
     let n = st.receiver_count() as usize - first;
     let nb = st.bands;
@@ -196,6 +200,7 @@ pub(crate) fn gather<E: Executor>(
                                 s,
                                 at,
                                 unit,
+                                l.flags & super::records::EXACT != 0,
                                 &mut b[..nb],
                             )
                         {

@@ -40,6 +40,10 @@ pub(crate) struct State {
     pub min_area: f32,
     /// Length beyond which a ray towards a directional source has left the scene (m).
     pub far: f32,
+    /// True when no light leaves the scene (see `direct::test_closed`), and whether light
+    /// then reaches the back of a one-sided polygon.
+    pub closed: bool,
+    pub sees_backs: bool,
     /// The contraction ratio of the last solution's iterations (infinite until known).
     pub contraction: f32,
     /// The scene's box (m).
@@ -237,6 +241,24 @@ impl State {
 
     pub(crate) fn set_ordered(&self, ws: &mut [u8], k: u32, poly: u32) {
         write(ws, self.lay.order + 4 * k as usize, &poly)
+    }
+
+    /// A cluster's summary of the light it and its ancestors receive (see
+    /// `oriented::summarize`).
+    pub(crate) fn summary<'a>(&self, ws: &'a [u8], cluster: u32) -> &'a [f32] {
+        let at = self.lay.clusters
+            + cluster as usize * self.lay.strides.cluster
+            + core::mem::size_of::<Cluster>()
+            + 4 * self.bands;
+        floats(ws, at, super::oriented::summary_floats(self.bands))
+    }
+
+    pub(crate) fn summary_mut<'a>(&self, ws: &'a mut [u8], cluster: u32) -> &'a mut [f32] {
+        let at = self.lay.clusters
+            + cluster as usize * self.lay.strides.cluster
+            + core::mem::size_of::<Cluster>()
+            + 4 * self.bands;
+        floats_mut(ws, at, super::oriented::summary_floats(self.bands))
     }
 
     /// A link's current flux density per band (see [`Link`]).
