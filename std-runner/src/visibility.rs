@@ -94,6 +94,12 @@ pub struct ObvhsVisibility {
     counts: Vec<u8>,
     /// Padded boxes in the normalised frame, per polygon (for box queries).
     boxes: Vec<BvhAabb>,
+    /// The BVH is built over distinct boxes: primitive `k` of the tree stands for the
+    /// polygons `members[groups[k]..groups[k + 1]]`, all with the same box. Thousands of
+    /// coincident polygons would otherwise give a tree deeper than obvhs' traversal stack
+    /// (which then silently drops nodes).
+    groups: Vec<u32>,
+    members: Vec<u32>,
     /// Centre of the normalised frame (m).
     centre: Vec3,
     /// World-to-normalised scale (1/m), a power of two.
@@ -145,6 +151,8 @@ impl ObvhsVisibility {
                 triangles: Vec::new(),
                 counts,
                 boxes: Vec::new(),
+                groups: vec![0],
+                members: Vec::new(),
                 centre: Vec3::ZERO,
                 inv_scale: 1.0,
             });
@@ -164,8 +172,32 @@ impl ObvhsVisibility {
                 BvhAabb::new(b.min - BOX_PAD, b.max + BOX_PAD)
             })
             .collect();
+        // Distinct boxes, in order of first appearance (deterministic).
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let key = |b: &BvhAabb| {
+            [
+                b.min.x.to_bits(),
+                b.min.y.to_bits(),
+                b.min.z.to_bits(),
+                b.max.x.to_bits(),
+                b.max.y.to_bits(),
+                b.max.z.to_bits(),
+            ]
+        };
+        order.sort_by_key(|&i| (key(&boxes[i as usize]), i));
+        let (mut groups, mut members, mut unique) = (vec![0u32], Vec::new(), Vec::new());
+        for (n, &i) in order.iter().enumerate() {
+            if n > 0 && key(&boxes[order[n - 1] as usize]) != key(&boxes[i as usize]) {
+                groups.push(members.len() as u32);
+            }
+            if n == 0 || key(&boxes[order[n - 1] as usize]) != key(&boxes[i as usize]) {
+                unique.push(boxes[i as usize]);
+            }
+            members.push(i);
+        }
+        groups.push(members.len() as u32);
         let bvh = build_cwbvh(
-            &boxes,
+            &unique,
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
@@ -181,6 +213,8 @@ impl ObvhsVisibility {
             triangles,
             counts,
             boxes,
+            groups,
+            members,
             centre,
             inv_scale,
         })
@@ -197,6 +231,13 @@ impl ObvhsVisibility {
     }
 
     /// True when polygon `id` crosses the open segment `o + t d`, `T_MARGIN < t < 1 - T_MARGIN`.
+    /// The polygons that tree primitive `g` stands for (see `groups`).
+    #[inline]
+    fn group(&self, g: u32) -> &[u32] {
+        let g = g as usize;
+        &self.members[self.groups[g] as usize..self.groups[g + 1] as usize]
+    }
+
     /// The nearest crossing of polygon `id` by the segment `o + t d`, if any.
     #[inline]
     fn crossing_of(&self, id: usize, o: DVec3, d: DVec3) -> Option<f64> {
@@ -244,9 +285,11 @@ impl ObvhsVisibility {
             state,
             node.intersect_aabb(&query, state.oct_inv4),
             {
-                let id = bvh.primitive_indices[state.primitive_id as usize];
-                if !skip.contains(&id) && query.intersect_aabb(&self.boxes[id as usize]) {
-                    out.push(id);
+                let g = bvh.primitive_indices[state.primitive_id as usize];
+                for &id in self.group(g) {
+                    if !skip.contains(&id) && query.intersect_aabb(&self.boxes[id as usize]) {
+                        out.push(id);
+                    }
                 }
             }
         );
@@ -376,12 +419,11 @@ impl Visibility for ObvhsVisibility {
         );
         let (o, dd) = (from.as_dvec3(), d.as_dvec3());
         let clear = bvh.ray_traverse_miss(ray, |_, k| {
-            let id = bvh.primitive_indices[k];
-            if id != skip[0] && id != skip[1] && self.blocks(id as usize, o, dd) {
-                0.0
-            } else {
-                f32::INFINITY
-            }
+            let blocked = self
+                .group(bvh.primitive_indices[k])
+                .iter()
+                .any(|&id| id != skip[0] && id != skip[1] && self.blocks(id as usize, o, dd));
+            if blocked { 0.0 } else { f32::INFINITY }
         });
         if clear { 1.0 } else { 0.0 }
     }
@@ -409,20 +451,20 @@ impl Visibility for ObvhsVisibility {
         let mut best: Option<(u32, f64)> = None;
         let mut hit = obvhs::ray::RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |_, k| {
-            let id = bvh.primitive_indices[k];
-            if id == skip[0] || id == skip[1] {
-                return f32::INFINITY;
-            }
-            match self.crossing_of(id as usize, o, dd) {
-                Some(t) => {
+            let mut nearest = f32::INFINITY;
+            for &id in self.group(bvh.primitive_indices[k]) {
+                if id == skip[0] || id == skip[1] {
+                    continue;
+                }
+                if let Some(t) = self.crossing_of(id as usize, o, dd) {
                     if best.is_none_or(|(bid, bt)| t < bt || (t == bt && id < bid)) {
                         best = Some((id, t));
                     }
                     // Keep looking a little beyond: f32 traversal against f64 crossings.
-                    (t as f32 * RAY_STRETCH) * (1.0 + 1e-5)
+                    nearest = nearest.min((t as f32 * RAY_STRETCH) * (1.0 + 1e-5));
                 }
-                None => f32::INFINITY,
             }
+            nearest
         });
         best.map(|(id, t)| (id, t as f32))
     }
@@ -730,5 +772,42 @@ mod tests {
     fn shared_across_threads() {
         fn is_sync<T: Sync + Send>() {}
         is_sync::<ObvhsVisibility>();
+    }
+
+    #[test]
+    fn thousands_of_coincident_polygons_are_all_found() {
+        // 3000 copies of one small triangle and a few others: the tree is built over distinct
+        // boxes, so it stays shallow, and every query agrees with testing each polygon.
+        let tri = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1e-6, 0.0, 0.0),
+            Vec3::new(0.0, 1e-6, 0.0),
+        ];
+        let mut polys = vec![tri.clone(); 3000];
+        polys.push(vec![
+            Vec3::new(-1.0, -1.0, 0.5),
+            Vec3::new(1.0, -1.0, 0.5),
+            Vec3::new(0.0, 1.0, 0.5),
+        ]);
+        let vis = ObvhsVisibility::new(&polys).unwrap();
+        let x = Vec3::new(2e-7, 2e-7, -1.0);
+        let up = Vec3::new(2e-7, 2e-7, 1.0);
+        // Through the stack from below: blocked, first by a copy (lowest id), then the cover.
+        assert_eq!(vis.transmittance(x, up, [NONE, NONE]), 0.0);
+        let hit = vis.first_hit(x, up, [NONE, NONE]).unwrap();
+        assert_eq!(hit, vis.first_hit_brute_force(x, up, [NONE, NONE]).unwrap());
+        assert_eq!(hit.0, 0);
+        // From a copy upwards: the cover.
+        let from = Vec3::new(2e-7, 2e-7, 0.0);
+        let hit = vis.first_hit(from, up, [5, NONE]).unwrap();
+        assert_eq!(hit.0, 3000);
+        let mut candidates = Vec::new();
+        vis.candidates(
+            Vec3::splat(-1e-7),
+            Vec3::splat(2e-6),
+            [NONE, NONE],
+            &mut candidates,
+        );
+        assert_eq!(candidates.len(), 3000);
     }
 }

@@ -349,3 +349,76 @@ fn reference_names_the_five_worst_polygons() {
         assert!((100.0 * (g - r) / r - got).abs() < 1e-4, "{w}");
     }
 }
+
+#[test]
+fn power_and_convergence_are_reported_and_a_capped_solve_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("s.json");
+    let results = dir.path().join("r.csv");
+    // A converged solve: the summary and the stats carry where the power went.
+    let out = hirad(&[
+        "solve",
+        s(&fixture("small_plant.hir")),
+        "--stats",
+        s(&stats),
+    ]);
+    assert!(out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("power (W)") && err.contains("par: in ") && err.contains("imbalance"),
+        "{err}"
+    );
+    assert!(
+        err.contains("converged (estimated change still to come"),
+        "{err}"
+    );
+    let report =
+        hirad::output::SolveReport::from_json(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(report.converged);
+    assert_eq!(report.power.len(), 2);
+    assert_eq!(report.power[0].band, "par");
+    for p in &report.power {
+        assert!(
+            p.direct > 0.0 && p.absorbed > 0.0 && p.escaped > 0.0,
+            "{p:?}"
+        );
+        assert!(p.imbalance_percent.abs() < 2.0, "{p:?}");
+    }
+    // Stopped at the iteration cap: outputs written, converged false, a non-zero exit that
+    // says so.
+    let err = fails(&[
+        "solve",
+        "-q",
+        s(&fixture("furnace_099.hir")),
+        "--max-iterations",
+        "6",
+        "--stats",
+        s(&stats),
+        "--results",
+        s(&results),
+    ]);
+    assert!(
+        err.contains("did not converge within 6 iterations"),
+        "{err}"
+    );
+    assert!(results.exists());
+    let report =
+        hirad::output::SolveReport::from_json(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(!report.converged);
+    assert!(
+        report.remaining_change.is_some_and(|r| r > 0.0),
+        "{:?}",
+        report.remaining_change
+    );
+    // A closed lossless room with a lamp is refused before any work, with the reason.
+    let lossless = dir.path().join("lossless.hir");
+    std::fs::write(
+        &lossless,
+        std::fs::read_to_string(fixture("furnace.hir"))
+            .unwrap()
+            .replace("rho 0.5 emit 1", "rho 1 emit 1"),
+    )
+    .unwrap();
+    let err = fails(&["solve", "-q", s(&lossless)]);
+    assert!(err.contains("no steady state in band 0"), "{err}");
+}
