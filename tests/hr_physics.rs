@@ -118,44 +118,11 @@ fn rel(got: f32, want: f32) -> f64 {
 
 #[test]
 fn leaves_lit_through_their_cluster_match_the_exact_solver_front_and_back() {
-    // Twelve translucent leaves of several orientations in a cluster over a tiled soil, lit
-    // by a sun from one side (PAR and NIR): every leaf's radiosity, front and back, within
-    // 3% of the exact solver at the default epsilon.
-    let mut r = Rng(3, 0);
-    let mut text = String::from(
-        "hirad 1\nbands par nir\nmaterial soil rho 0.1 0.3\n\
-         material leaf rho 0.08 0.45 back_rho 0.1 0.45 tau 0.05 0.43\n\
-         sun from 0.5 0.3 0.81 irradiance 400 400\nscene {\n  cluster ground {\n",
-    );
-    for i in 0..12 {
-        for j in 0..12 {
-            let c = [
-                -1.0 + (i as f32 + 0.5) / 6.0,
-                -1.0 + (j as f32 + 0.5) / 6.0,
-                0.0,
-            ];
-            text += &quad(
-                "soil",
-                c,
-                [1., 0., 0.],
-                [0., 1., 0.],
-                1.0 / 12.0,
-                1.0 / 12.0,
-            );
-        }
-    }
-    text += "  }\n  cluster leaves {\n";
-    for _ in 0..12 {
-        let c = [
-            r.range(-0.35, 0.35),
-            r.range(-0.35, 0.35),
-            r.range(0.3, 0.9),
-        ];
-        let (u, v) = leaf_axes(&mut r);
-        text += &quad("leaf", c, u, v, 0.08, 0.03);
-    }
-    text += "  }\n}\n";
-    let scene = parse(&text);
+    // fixtures/leaves_cluster.hir: twelve translucent leaves of several orientations in a
+    // cluster over a tiled soil, lit by a sun from one side (PAR and NIR): every leaf's
+    // radiosity, front and back, within 3% of the exact solver at the default epsilon.
+    let scene =
+        parse(&std::fs::read_to_string(hirad_tests::fixture("leaves_cluster.hir")).unwrap());
     let (hr, stats) = solve(&scene, &Settings::default()).unwrap();
     assert!(stats.converged);
     let ex = exact(&scene, 3000);
