@@ -84,6 +84,66 @@ pub fn quadrature(
     }
 }
 
+/// Most points of [`clipped_quadrature`]: a quad clipped by a plane is at most a pentagon,
+/// three triangles of three points.
+pub const MAX_CLIPPED_QUADRATURE: usize = 9;
+
+/// Quadrature over the part of a convex polygon in front of a plane (through `on_plane`,
+/// normal `normal`): the clipped polygon fanned into triangles, each with the triangle rule.
+/// The weights are fractions of the whole polygon's area (they sum to the part in front).
+/// For an emitter straddling a receiver's plane, where its own few points would count a
+/// third of it (or none) instead of the part that shows. Returns the point count.
+pub fn clipped_quadrature(
+    corners: &[Vec3],
+    on_plane: Vec3,
+    normal: Vec3,
+    points: &mut [Vec3; MAX_CLIPPED_QUADRATURE],
+    weights: &mut [f32; MAX_CLIPPED_QUADRATURE],
+) -> usize {
+    let m = corners.len().min(4);
+    let mut clipped = [Vec3::ZERO; 5];
+    let mut k = 0;
+    for i in 0..m {
+        let (a, b) = (corners[i], corners[(i + 1) % m]);
+        let (da, db) = (normal.dot(a - on_plane), normal.dot(b - on_plane));
+        if da > 0.0 && k < 5 {
+            clipped[k] = a;
+            k += 1;
+        }
+        if (da > 0.0) != (db > 0.0) && k < 5 {
+            let t = da / (da - db);
+            if t.is_finite() {
+                clipped[k] = a + (b - a) * t;
+                k += 1;
+            }
+        }
+    }
+    let whole = polygon_area(&corners[..m]);
+    if k < 3 || whole <= 0.0 {
+        return 0;
+    }
+    let mut n = 0;
+    for t in 1..k - 1 {
+        let (a, b, c) = (clipped[0], clipped[t], clipped[t + 1]);
+        let w = 0.5 * (b - a).cross(c - a).length() / whole / 3.0;
+        for (pa, pb, pc) in [(a, b, c), (b, c, a), (c, a, b)] {
+            points[n] = pa * (2.0 / 3.0) + pb * (1.0 / 6.0) + pc * (1.0 / 6.0);
+            weights[n] = w;
+            n += 1;
+        }
+    }
+    n
+}
+
+/// Area of a planar convex polygon (m^2).
+fn polygon_area(corners: &[Vec3]) -> f32 {
+    let mut twice = Vec3::ZERO;
+    for t in 1..corners.len().saturating_sub(1) {
+        twice += (corners[t] - corners[0]).cross(corners[t + 1] - corners[0]);
+    }
+    0.5 * twice.length()
+}
+
 /// Splits a quad into 4 quads at its edge midpoints and centre, or a triangle into 4
 /// triangles at its edge midpoints (the middle one keeps the orientation). Children keep the
 /// parent's orientation and, for a planar convex parent, are planar and convex.

@@ -11,11 +11,13 @@
 //! two elements, so a link's value never depends on when or on which thread it is computed.
 
 use super::ids::{Elem, Kind};
-use super::sample::point_in;
+use super::sample::{point_facing, point_in};
 use super::state::{Shape, State};
 use crate::formfactor::{facing_side, point_polygon, point_polygon_light};
 use crate::limits::NONE;
-use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
+use crate::sampling::{
+    MAX_CLIPPED_QUADRATURE, MAX_QUADRATURE, clipped_quadrature, hash3, point_on, quadrature, unit2,
+};
 use crate::visibility::Visibility;
 use core::f32::consts::PI;
 use glam::Vec3;
@@ -224,19 +226,44 @@ fn reciprocal<V: Visibility + ?Sized>(
     } else {
         0.0
     };
-    for q in 0..m {
-        let (y, w) = (pts[q], wts[q]);
-        if w == 0.0 {
-            continue;
+    // The emitter's points, each with the receiving side it faces. An emitter straddling
+    // the receiver's plane is integrated over the part on each side.
+    const N: usize = 2 * MAX_CLIPPED_QUADRATURE;
+    let (mut ys, mut yw, mut ysd) = ([Vec3::ZERO; N], [0.0f32; N], [0usize; N]);
+    let mut count = 0;
+    let dist = |c: Vec3| r_normal.dot(c - rc[0]);
+    let scale = ec.iter().fold(0.0f32, |a, &c| a.max((c - rc[0]).length()));
+    let straddles = ec.iter().any(|&c| dist(c) > 1e-6 * scale)
+        && ec.iter().any(|&c| dist(c) < -1e-6 * scale)
+        && !(0..4).any(|q| ep.buried(q));
+    if straddles {
+        for side in 0..r_sides {
+            let nr = if side == 0 { r_normal } else { -r_normal };
+            let (mut cp, mut cw) = (
+                [Vec3::ZERO; MAX_CLIPPED_QUADRATURE],
+                [0.0f32; MAX_CLIPPED_QUADRATURE],
+            );
+            let k = clipped_quadrature(ec, rc[0], nr, &mut cp, &mut cw);
+            for i in 0..k {
+                (ys[count], yw[count], ysd[count]) = (cp[i], cw[i], side);
+                count += 1;
+            }
         }
-        for s in 0..if e_two { 2 } else { 1 } {
-            let ns = if s == 0 { e_normal } else { -e_normal };
-            let Some(r_side) = facing_side(y, rc[0], r_normal) else {
+    } else {
+        for q in 0..m {
+            let Some(side) = facing_side(pts[q], rc[0], r_normal) else {
                 continue;
             };
-            if r_side >= r_sides {
-                continue;
+            if wts[q] > 0.0 && side < r_sides {
+                (ys[count], yw[count], ysd[count]) = (pts[q], wts[q], side);
+                count += 1;
             }
+        }
+    }
+    for q in 0..count {
+        let (y, w, r_side) = (ys[q], yw[q], ysd[q]);
+        for s in 0..if e_two { 2 } else { 1 } {
+            let ns = if s == 0 { e_normal } else { -e_normal };
             let f = point_polygon(y, ns, rc);
             if f <= 0.0 {
                 continue;
@@ -297,46 +324,134 @@ fn small_cluster(st: &State, ws: &[u8], e: Elem) -> bool {
 }
 
 /// The polygons of cluster `e` and the side of each that faces `x` (None: `x` in its plane
-/// or that side does not emit), through `f`.
-fn each_facing(st: &State, ws: &[u8], e: Elem, x: Vec3, mut f: impl FnMut(&[Vec3])) {
+/// or that side does not emit), through `f(index in the cluster, polygon, corners)`.
+fn each_facing(st: &State, ws: &[u8], e: Elem, x: Vec3, mut f: impl FnMut(u32, u32, &[Vec3])) {
     let c = st.cluster(ws, e.index());
-    for k in c.first_polygon..c.first_polygon + c.polygons {
-        let poly = st.ordered(ws, k);
+    for k in 0..c.polygons {
+        let (poly, corners, n) = cluster_polygon(st, ws, c.first_polygon + k);
         let rec = st.polygon(ws, poly);
-        let root = Elem(rec.root);
-        let p = st.patch(ws, root);
-        let n = p.corner_count();
-        let mut corners = [Vec3::ZERO; 4];
-        for (c, src) in corners.iter_mut().zip(p.corners) {
-            *c = src.into();
-        }
         let Some(side) = facing_side(x, corners[0], Vec3::from(rec.normal)) else {
             continue;
         };
-        if side >= State::sides(root) {
+        if side >= State::sides(Elem(rec.root)) {
             continue;
         }
-        f(&corners[..n]);
+        f(k, poly, &corners[..n]);
+    }
+}
+
+/// The input polygon at position `k` of the cluster order, with its corners and their count.
+fn cluster_polygon(st: &State, ws: &[u8], k: u32) -> (u32, [Vec3; 4], usize) {
+    let poly = st.ordered(ws, k);
+    let p = st.patch(ws, Elem(st.polygon(ws, poly).root));
+    let mut corners = [Vec3::ZERO; 4];
+    for (c, src) in corners.iter_mut().zip(p.corners) {
+        *c = src.into();
+    }
+    (poly, corners, p.corner_count())
+}
+
+/// What a small cluster's polygons facing a point bring it, polygon by polygon: each one's
+/// weight (its form factor or solid angle at the point) and where it sits in the cluster,
+/// so that visibility rays go to the polygons in proportion to what they bring. (Rays to
+/// points anywhere in the cluster would count its faces turned away, hidden behind its own
+/// front, as shadow: a block seen from beside another got about half its light.)
+struct Facing {
+    count: usize,
+    at: [u32; SMALL_CLUSTER as usize],
+    weight: [f32; SMALL_CLUSTER as usize],
+    total: f32,
+}
+
+impl Facing {
+    fn new() -> Self {
+        Facing {
+            count: 0,
+            at: [0; SMALL_CLUSTER as usize],
+            weight: [0.0; SMALL_CLUSTER as usize],
+            total: 0.0,
+        }
+    }
+
+    fn push(&mut self, k: u32, w: f32) {
+        if w > 0.0 && self.count < self.at.len() {
+            self.at[self.count] = k;
+            self.weight[self.count] = w;
+            self.count += 1;
+            self.total += w;
+        }
+    }
+
+    /// Fraction of the light of the facing polygons that reaches `x` unblocked: `rays`
+    /// rays, each to a polygon drawn by weight and a point on it in front of the plane
+    /// through `x` with normal `nr` (when given).
+    #[allow(clippy::too_many_arguments)]
+    fn visible<V: Visibility + ?Sized>(
+        &self,
+        st: &State,
+        ws: &[u8],
+        e: Elem,
+        x: Vec3,
+        nr: Option<Vec3>,
+        from: u32,
+        seed: u32,
+        rays: u32,
+        vis: &V,
+    ) -> f32 {
+        if self.count == 0 || self.total <= 0.0 {
+            return 1.0;
+        }
+        let first = st.cluster(ws, e.index()).first_polygon;
+        let mut seen = 0.0f32;
+        for j in 0..rays {
+            let h = hash3(seed, j, 0xB7);
+            let target = (h >> 8) as f32 * (1.0 / 16_777_216.0) * self.total;
+            let mut pick = self.count - 1;
+            let mut acc = 0.0f32;
+            for i in 0..self.count {
+                acc += self.weight[i];
+                if target < acc {
+                    pick = i;
+                    break;
+                }
+            }
+            let (poly, corners, n) = cluster_polygon(st, ws, first + self.at[pick]);
+            let mut y = Vec3::ZERO;
+            for t in 0..4 {
+                let (u, v) = unit2(hash3(h, t, 0xB8));
+                y = point_on(&corners[..n], u, v);
+                if nr.is_none_or(|nr| nr.dot(y - x) > 0.0) {
+                    break;
+                }
+            }
+            seen += vis.transmittance(x, y, [from, poly]);
+        }
+        seen / rays.max(1) as f32
     }
 }
 
 /// The exact form factor from a point (normal `nr`) to the polygons of a cluster that face
-/// it.
-fn cluster_form_factor(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: Vec3) -> f32 {
-    let mut sum = 0.0f32;
-    each_facing(st, ws, e, x, |c| sum += point_polygon(x, nr, c));
-    sum.min(1.0)
+/// it, polygon by polygon.
+fn cluster_form_factor(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: Vec3) -> Facing {
+    let mut out = Facing::new();
+    each_facing(st, ws, e, x, |k, _, c| out.push(k, point_polygon(x, nr, c)));
+    out
 }
 
-/// Solid angle and vector form factor at `x` of the polygons of a cluster that face it.
-fn cluster_light(st: &State, ws: &[u8], e: Elem, x: Vec3) -> (f32, Vec3) {
+/// Solid angle and vector form factor at `x` of the polygons of a cluster that face it;
+/// the weights are the solid angles.
+fn cluster_light(st: &State, ws: &[u8], e: Elem, x: Vec3) -> (f32, Vec3, Facing) {
     let (mut omega, mut phi) = (0.0f32, Vec3::ZERO);
-    each_facing(st, ws, e, x, |c| {
+    let mut facing = Facing::new();
+    each_facing(st, ws, e, x, |k, _, c| {
         let (o, p) = point_polygon_light(x, c);
-        omega += o;
-        phi += p;
+        if o.is_finite() {
+            omega += o;
+            phi += p;
+            facing.push(k, o);
+        }
     });
-    (omega.min(4.0 * PI), phi)
+    (omega.min(4.0 * PI), phi, facing)
 }
 
 /// True when `x` lies outside the box (so that the box's faces seen from it are a proper
@@ -457,18 +572,14 @@ fn to_point<V: Visibility + ?Sized>(
         Shape::Cluster { area, .. } if small_cluster(st, ws, emit) => {
             // Exact: the form factors of the cluster's polygons that face the point, times
             // the visible fraction of rays into the cluster.
-            let open = cluster_form_factor(st, ws, emit, x, nr);
+            let facing = cluster_form_factor(st, ws, emit, x, nr);
+            let open = facing.total.min(1.0);
             if open <= 0.0 {
                 return (0.0, 0.0, 0);
             }
             let _ = area;
-            let mut seen = 0.0f32;
-            for j in 0..rays {
-                let (y, py) = point_in(st, ws, emit, hash3(seed, j, 0xB7));
-                seen += vis.transmittance(x, y, [poly, py]);
-            }
+            let v = facing.visible(st, ws, emit, x, Some(nr), poly, seed, rays, vis);
             out.rays += rays;
-            let v = seen / rays as f32;
             out.partial |= v < 1.0;
             (open * v, open, 0)
         }
@@ -485,7 +596,7 @@ fn to_point<V: Visibility + ?Sized>(
             let open = area * ff / (4.0 * projected);
             let mut seen = 0.0f32;
             for j in 0..rays {
-                let (y, py) = point_in(st, ws, emit, hash3(seed, j, 0xB7));
+                let (y, py) = point_facing(st, ws, emit, x, Some(nr), hash3(seed, j, 0xB7));
                 seen += vis.transmittance(x, y, [poly, py]);
             }
             out.rays += rays;
@@ -496,7 +607,8 @@ fn to_point<V: Visibility + ?Sized>(
         Shape::Cluster { area, .. } => {
             let (mut sum, mut open) = (0.0f32, 0.0f32);
             for j in 0..rays {
-                let (y, py) = point_in(st, ws, emit, hash3(seed, j, 0xB7));
+                // Not restricted to the receiving side: the kernel counts the part behind as 0.
+                let (y, py) = point_facing(st, ws, emit, x, None, hash3(seed, j, 0xB7));
                 let d = y - x;
                 let d2 = d.length_squared();
                 if d2 <= 0.0 {
@@ -574,13 +686,12 @@ fn flux_at<V: Visibility + ?Sized>(
         }
         Shape::Cluster { .. } if small_cluster(st, ws, emit) => {
             // Exact: solid angles and vector form factors of the polygons facing the point.
-            let (omega, phi) = cluster_light(st, ws, emit, x);
+            let (omega, phi, facing) = cluster_light(st, ws, emit, x);
             let f = omega / PI;
             if f.is_nan() || f <= 0.0 {
                 return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
             }
-            let (y, py) = point_in(st, ws, emit, seed);
-            let v = vis.transmittance(x, y, [px, py]);
+            let v = facing.visible(st, ws, emit, x, None, px, seed, 1, vis);
             (f, f, 0, v, phi / f)
         }
         Shape::Cluster { area, min, max } if outside(x, min, max) => {
@@ -593,12 +704,12 @@ fn flux_at<V: Visibility + ?Sized>(
                 return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
             }
             let f = area * omega / (4.0 * PI * projected);
-            let (y, py) = point_in(st, ws, emit, seed);
+            let (y, py) = point_facing(st, ws, emit, x, None, seed);
             let v = vis.transmittance(x, y, [px, py]);
             (f, f, 0, v, phi * (PI / omega))
         }
         Shape::Cluster { area, .. } => {
-            let (y, py) = point_in(st, ws, emit, seed);
+            let (y, py) = point_facing(st, ws, emit, x, None, seed);
             let d = y - x;
             let d2 = d.length_squared();
             let f = area / (4.0 * PI * d2 + area);

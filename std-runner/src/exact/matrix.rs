@@ -157,15 +157,20 @@ fn row<R: PairRays + ?Sized>(
                 }
                 visibility.pair(b.min, b.max, skip, &mut candidates)
             });
-            let v = if kind == Pair::Clear {
-                1.0
-            } else {
-                cost.rays += rays as u64;
-                let seed = hash3(i as u32, j as u32, q as u32);
-                let ray = |y: Vec3| visibility.cast(x, y, skip, kind, &candidates);
-                visible_fraction(ray, ej, seed, rays)
-            };
             for (r, f) in ff.iter().enumerate() {
+                if *f <= 0.0 {
+                    continue;
+                }
+                let v = if kind == Pair::Clear {
+                    1.0
+                } else {
+                    let seed = hash3(i as u32, j as u32, q as u32 + 16 * r as u32);
+                    let ray = |y: Vec3| visibility.cast(x, y, skip, kind, &candidates);
+                    let side = if r == 0 { ei.normal } else { -ei.normal };
+                    let (v, cast) = visible_fraction(ray, ej, x, side, seed, rays);
+                    cost.rays += cast as u64;
+                    v
+                };
                 acc[r][s] += w as f64 * f * v;
             }
         }
@@ -190,18 +195,42 @@ fn row<R: PairRays + ?Sized>(
     (out, cost)
 }
 
-/// Fraction of `rays` segments from the receiving point to jittered points on `ej` that
-/// `ray` lets through. The points are stratified on a `g x ceil(rays / g)` grid of the
-/// emitter's parameter square (`g = ceil(sqrt(rays))`), jittered by `hash3(seed, k, ..)`.
-fn visible_fraction(ray: impl Fn(Vec3) -> f32, ej: &Element, seed: u32, rays: u32) -> f64 {
+/// Fraction of `rays` segments from the receiving point `x` to jittered points on `ej` in
+/// front of the receiving side (normal `n`) that `ray` lets through, and the rays cast. The
+/// points are stratified on a `g x ceil(rays / g)` grid of the emitter's parameter square
+/// (`g = ceil(sqrt(rays))`), jittered by `hash3(seed, k, ..)`; points behind the receiving
+/// plane are skipped and the grid drawn again (up to 4 times) until `rays` are cast: the
+/// part of an emitter straddling that plane which lies behind it is no shadow (counting it
+/// darkened a block face lit at grazing angle by 3%).
+fn visible_fraction(
+    ray: impl Fn(Vec3) -> f32,
+    ej: &Element,
+    x: Vec3,
+    n: Vec3,
+    seed: u32,
+    rays: u32,
+) -> (f64, u32) {
     let g = (rays as f64).sqrt().ceil() as u32;
     let rows = rays.div_ceil(g);
-    let mut sum = 0.0f64;
-    for k in 0..rays {
-        let (ju, jv) = unit2(hash3(seed, k, 0x0E1E_C7ED));
-        let u = ((k % g) as f32 + ju) / g as f32;
-        let v = ((k / g) as f32 + jv) / rows as f32;
-        sum += ray(point_on(ej.corners(), u.min(1.0), v.min(1.0))) as f64;
+    let (mut sum, mut cast) = (0.0f64, 0u32);
+    'grids: for pass in 0..4 {
+        for k in 0..rays {
+            if cast == rays {
+                break 'grids;
+            }
+            let (ju, jv) = unit2(hash3(seed, k + pass * rays, 0x0E1E_C7ED));
+            let u = ((k % g) as f32 + ju) / g as f32;
+            let v = ((k / g) as f32 + jv) / rows as f32;
+            let y = point_on(ej.corners(), u.min(1.0), v.min(1.0));
+            if n.dot(y - x) <= 0.0 {
+                continue;
+            }
+            sum += ray(y) as f64;
+            cast += 1;
+        }
     }
-    sum / rays as f64
+    if cast == 0 {
+        return (1.0, 0);
+    }
+    (sum / cast as f64, cast)
 }
