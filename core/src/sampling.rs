@@ -178,6 +178,69 @@ mod tests {
     use crate::geometry::polygon_shape;
 
     #[test]
+    fn clipped_quadrature_integrates_the_part_in_front() {
+        let v = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+        let quad = [v(0., 0.), v(2., 0.), v(2., 1.), v(0., 1.)];
+        let tri = [v(0., 0.), v(2., 0.), v(0., 2.)];
+        let (mut p, mut w) = (
+            [Vec3::ZERO; MAX_CLIPPED_QUADRATURE],
+            [0.0; MAX_CLIPPED_QUADRATURE],
+        );
+        // Planes x = c (front towards -x or +x), and a slanted one: the weights sum to the
+        // area fraction in front, and a linear function integrates exactly.
+        for corners in [&quad[..], &tri[..]] {
+            for (o, n) in [
+                (v(0.5, 0.), Vec3::X),
+                (v(0.5, 0.), -Vec3::X),
+                (v(1.3, 0.4), Vec3::new(1., 1., 0.).normalize()),
+            ] {
+                let k = clipped_quadrature(corners, o, n, &mut p, &mut w);
+                // Reference by a fine grid over the polygon.
+                let (mut frac, mut fx) = (0.0f64, 0.0f64);
+                let g = 400;
+                for i in 0..g {
+                    for j in 0..g {
+                        let x = point_on(
+                            corners,
+                            (i as f32 + 0.5) / g as f32,
+                            (j as f32 + 0.5) / g as f32,
+                        );
+                        if corners.len() == 3 && i + j >= g {
+                            continue;
+                        }
+                        if n.dot(x - o) > 0.0 {
+                            frac += 1.0;
+                            fx += x.x as f64 + 2.0 * x.y as f64;
+                        }
+                    }
+                }
+                let cells = if corners.len() == 3 {
+                    (g * (g + 1) / 2) as f64
+                } else {
+                    (g * g) as f64
+                };
+                let sum: f32 = w[..k].iter().sum();
+                let integral: f32 = (0..k).map(|q| w[q] * (p[q].x + 2.0 * p[q].y)).sum();
+                assert!(
+                    (sum as f64 - frac / cells).abs() < 0.01,
+                    "{sum} vs {}",
+                    frac / cells
+                );
+                assert!(
+                    (integral as f64 - fx / cells).abs() < 0.02,
+                    "{integral} vs {}",
+                    fx / cells
+                );
+            }
+        }
+        // Wholly behind: nothing.
+        assert_eq!(
+            clipped_quadrature(&quad, v(3., 0.), Vec3::X, &mut p, &mut w),
+            0
+        );
+    }
+
+    #[test]
     fn hash_is_spread_and_stable() {
         assert_eq!(hash3(1, 2, 3), hash3(1, 2, 3));
         assert_ne!(hash3(1, 2, 3), hash3(1, 2, 4));
