@@ -220,22 +220,26 @@ fn reciprocal<V: Visibility + ?Sized>(
     let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
     let m = exposed_quadrature(&ep, ec, &mut pts, &mut wts);
     let seen_r = r_area * rp.exposed;
-    let ratio_open = e_area * ep.exposed / r_area;
-    let ratio = if seen_r > 0.0 {
-        e_area * ep.exposed / seen_r
+    let (dist, scale) = (
+        |c: Vec3| r_normal.dot(c - rc[0]),
+        ec.iter().fold(0.0f32, |a, &c| a.max((c - rc[0]).length())),
+    );
+    let straddles =
+        ec.iter().any(|&c| dist(c) > 1e-6 * scale) && ec.iter().any(|&c| dist(c) < -1e-6 * scale);
+    // A straddling emitter is integrated over its whole area in front (a buried part there
+    // is dark to the rays), so its exposure is not counted again.
+    let e_seen = if straddles {
+        e_area
     } else {
-        0.0
+        e_area * ep.exposed
     };
+    let ratio_open = e_seen / r_area;
+    let ratio = if seen_r > 0.0 { e_seen / seen_r } else { 0.0 };
     // The emitter's points, each with the receiving side it faces. An emitter straddling
     // the receiver's plane is integrated over the part on each side.
     const N: usize = 2 * MAX_CLIPPED_QUADRATURE;
     let (mut ys, mut yw, mut ysd) = ([Vec3::ZERO; N], [0.0f32; N], [0usize; N]);
     let mut count = 0;
-    let dist = |c: Vec3| r_normal.dot(c - rc[0]);
-    let scale = ec.iter().fold(0.0f32, |a, &c| a.max((c - rc[0]).length()));
-    let straddles = ec.iter().any(|&c| dist(c) > 1e-6 * scale)
-        && ec.iter().any(|&c| dist(c) < -1e-6 * scale)
-        && !(0..4).any(|q| ep.buried(q));
     if straddles {
         for side in 0..r_sides {
             let nr = if side == 0 { r_normal } else { -r_normal };
