@@ -230,7 +230,7 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
     let matrix_start = Instant::now();
     let m = matrix::build(mesh, &quad, settings.rays, rays);
     let matrix_seconds = matrix_start.elapsed().as_secs_f64();
-    let (direct, direct_rays) = direct::direct(scene, mesh, &quad, visibility);
+    let (direct, direct_rays) = direct::direct(scene, mesh, &exposure.exposed, visibility);
     let solution = solve::solve(
         scene,
         mesh,

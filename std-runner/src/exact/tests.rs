@@ -197,6 +197,33 @@ fn a_sun_lights_a_floor_with_its_cosine_and_a_blocker_shades_it() {
 }
 
 #[test]
+fn a_shadow_edge_inside_an_element_is_resolved() {
+    // A vertical sun and the blocker moved so that its shadow, [-0.13, 0.37]^2, cuts each of
+    // the floor's four elements in a corner: the lit fractions are exact areas, which a few
+    // quadrature points per element would give as thirds or quarters.
+    let mut s = Scene::new(1);
+    s.materials = vec![
+        material("floor", |m| m.rho_front[0] = 0.5),
+        material("black", |_| {}),
+    ];
+    square(&mut s.root, -1., -1., 2., 0.0, true, 0);
+    square(&mut s.root, -0.13, -0.13, 0.5, 1.0, true, 1);
+    s.suns.push(light(Vec3::Z, &[800.0]));
+    let (got, _) = solve(&s, &small(5));
+    let mut b: Vec<f32> = got[0].patches.iter().map(|(_, r)| r[0][0]).collect();
+    b.sort_by(f32::total_cmp);
+    let mut expect: Vec<f32> = [0.13f32 * 0.13, 0.13 * 0.37, 0.13 * 0.37, 0.37 * 0.37]
+        .iter()
+        .map(|shade| 0.5 * 800.0 * (1.0 - shade))
+        .collect();
+    expect.sort_by(f32::total_cmp);
+    assert_eq!(b.len(), 4, "{b:?}");
+    for (g, e) in b.iter().zip(&expect) {
+        assert!((g / e - 1.0).abs() < 0.01, "{b:?} vs {expect:?}");
+    }
+}
+
+#[test]
 fn a_two_sided_leaf_lit_from_behind_receives_on_its_back() {
     let mut s = Scene::new(1);
     s.materials = vec![material("leaf", |m| {
