@@ -149,8 +149,20 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
         Shape::Cluster { .. } => {
             let inv = 1.0 / rays as f32;
             let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
+            // Points on surfaces that can take the light: a one-sided face turned away from
+            // the emitter is hidden from it by its own object (a stem's far side), which the
+            // polygons' shares already leave dark; counting it as shadow too halved what a
+            // stem got from the soil.
+            let towards = match e {
+                Shape::Source { .. } => None,
+                _ => Some(super::oriented::centre(st, ws, emit)),
+            };
             for k in 0..rays {
-                let (x, px) = point_in(st, ws, recv, hash3(seed, k, 0xC1));
+                let h = hash3(seed, k, 0xC1);
+                let (x, px) = match towards {
+                    Some(c) => point_facing(st, ws, recv, c, None, h),
+                    None => point_in(st, ws, recv, h),
+                };
                 let (f, open, s_side, v, d) =
                     flux_at(st, ws, x, px, &e, emit, hash3(seed, k, 0xE1), vis);
                 out.rays += (f > 0.0 || open > 0.0) as u32;
