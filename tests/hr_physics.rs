@@ -195,7 +195,11 @@ fn a_stem_in_the_sun_gets_the_light_of_the_soil_on_its_shaded_faces() {
         }
     }
     let e = got / want - 1.0;
-    assert!(e.abs() < 0.15, "shaded faces: {got} vs exact {want} ({:+.1}%)", 100.0 * e);
+    assert!(
+        e.abs() < 0.15,
+        "shaded faces: {got} vs exact {want} ({:+.1}%)",
+        100.0 * e
+    );
     eprintln!(
         "shaded stem faces {:+.1}%, worst face {:.1}%",
         100.0 * e,
