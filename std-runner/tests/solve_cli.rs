@@ -410,6 +410,39 @@ fn power_and_convergence_are_reported_and_a_capped_solve_fails() {
         "{:?}",
         report.remaining_change
     );
+    // A solve whose power does not balance within --max-imbalance writes its outputs and
+    // fails, naming the band and how much light the transport lost; within it, it succeeds
+    // (the room loses a few percent through its cluster links at the default epsilon: a
+    // warning above 1%).
+    std::fs::remove_file(&results).unwrap();
+    let err = fails(&[
+        "solve",
+        "-q",
+        s(&fixture("chair_room.hir")),
+        "--max-imbalance",
+        "0.5",
+        "--results",
+        s(&results),
+    ]);
+    assert!(
+        err.contains("the power balance is off by +") && err.contains("above --max-imbalance 0.5%"),
+        "{err}"
+    );
+    assert!(results.exists());
+    let out = hirad(&[
+        "solve",
+        s(&fixture("chair_room.hir")),
+        "--max-imbalance",
+        "50",
+    ]);
+    assert!(out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("warning: the power balance is off by"),
+        "{err}"
+    );
+    let err = fails(&["solve", s(&fixture("chair_room.hir")), "--max-imbalance=-1"]);
+    assert!(err.contains("--max-imbalance must be"), "{err}");
     // A closed lossless room with a lamp is refused before any work, with the reason.
     let lossless = dir.path().join("lossless.hir");
     std::fs::write(

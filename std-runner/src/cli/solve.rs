@@ -79,6 +79,11 @@ pub struct Args {
     /// before meeting the tolerance is reported as not converged and the run fails.
     #[arg(long, default_value_t = Settings::default().max_iterations)]
     pub max_iterations: u32,
+    /// Largest power imbalance (hr, % of what enters, any band) a solve may end with and
+    /// succeed: light the transport lost or made (see the summary's power lines). Above 1% a
+    /// warning says so; above this the outputs are written and the run fails.
+    #[arg(long, default_value_t = 5.0)]
+    pub max_imbalance: f64,
     /// Element budget of the exact solver (its matrix grows as the square).
     #[arg(long, default_value_t = ExactSettings::default().max_elements)]
     pub elements: usize,
@@ -123,6 +128,12 @@ pub fn run(a: Args) -> Result<()> {
     }
     if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
         bail!("--tolerance must be a positive number, got {}", a.tolerance);
+    }
+    if !(a.max_imbalance.is_finite() && a.max_imbalance >= 0.0) {
+        bail!(
+            "--max-imbalance must be a percentage of at least 0, got {}",
+            a.max_imbalance
+        );
     }
     if a.max_iterations == 0 {
         bail!("--max-iterations must be at least 1");
@@ -318,6 +329,33 @@ pub fn run(a: Args) -> Result<()> {
                 ))
                 .unwrap_or_default()
         );
+    }
+    // An unconverged solution fails above; the balance of a final one:
+    // The band whose power balance is worst (hr only: the exact solver has no balance).
+    let worst = report.power.iter().max_by(|x, y| {
+        x.imbalance_percent
+            .abs()
+            .total_cmp(&y.imbalance_percent.abs())
+    });
+    if let Some(w) = worst.filter(|w| w.imbalance_percent.abs() > 1.0) {
+        let what = if w.imbalance_percent > 0.0 {
+            "lost"
+        } else {
+            "made"
+        };
+        let line = format!(
+            "the power balance is off by {:+.2}% in band {}: the transport {what} that much light (cluster links approximate; a smaller --epsilon or more --rays brings it down)",
+            w.imbalance_percent, w.band
+        );
+        if w.imbalance_percent.abs() > a.max_imbalance {
+            bail!(
+                "{line}; above --max-imbalance {}%, the outputs were written but are not right",
+                a.max_imbalance
+            );
+        }
+        if !a.quiet {
+            eprintln!("warning: {line}");
+        }
     }
     Ok(())
 }
