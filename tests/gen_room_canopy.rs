@@ -233,6 +233,37 @@ fn room_solve_lights_every_floor_tile() {
 }
 
 #[test]
+fn room_at_the_default_epsilon_converges_and_keeps_its_light() {
+    // 55,000 polygons of furniture standing on a floor and against walls, lit by ceiling
+    // panels: the solution must converge (one version diverged here: clusters that straddle
+    // an emitter's plane got its light on both sides) and lose little light. Measured: 9.5%
+    // of the red band lost through cluster links (20% before the fix of receiving clusters'
+    // samples); the bound guards the class, not the goal (0.5%).
+    let s = room_scene(&[]);
+    let mut out = Radiosity::default();
+    let run = solve_hr(
+        &s,
+        &Settings::default(),
+        2,
+        None,
+        VisibilityChoice::Obvhs,
+        &Progress::new(true),
+        &mut out,
+    )
+    .unwrap();
+    assert!(
+        run.stats.converged && !run.stats.diverged,
+        "{:?}",
+        run.stats
+    );
+    for b in 0..s.bands as usize {
+        let e = run.stats.balance.relative_imbalance(b);
+        assert!(e.abs() < 0.12, "band {b}: imbalance {:+.2}%", 100.0 * e);
+    }
+    assert!(out.0.iter().flatten().all(|v| v.is_finite()));
+}
+
+#[test]
 fn canopy_is_deterministic_valid_and_as_asked() {
     let dir = tempfile::tempdir().unwrap();
     let a = canopy_scene(&[]);

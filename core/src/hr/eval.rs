@@ -149,28 +149,49 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
         Shape::Cluster { .. } => {
             let inv = 1.0 / rays as f32;
             let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
-            // Points on surfaces that can take the light: a one-sided face turned away from
-            // the emitter is hidden from it by its own object (a stem's far side), which the
-            // polygons' shares already leave dark; counting it as shadow too halved what a
-            // stem got from the soil.
-            let towards = match e {
+            // A sample on a one-sided face turned away from the emitter is hidden from it by
+            // its own object, which the polygons' shares already leave dark: its visibility
+            // is taken as that of the samples on faces that can take the light (counting it
+            // as shadow too halved what a stem's far side got from the soil). Its flux density
+            // still counts, zero where the emitter does not face it.
+            let at = match e {
                 Shape::Source { .. } => None,
                 _ => Some(super::oriented::centre(st, ws, emit)),
             };
+            let (mut seen, mut facing) = (0.0f32, 0.0f32);
+            let mut deferred = [(0.0f32, Vec3::ZERO); 2];
             for k in 0..rays {
-                let h = hash3(seed, k, 0xC1);
-                let (x, px) = match towards {
-                    Some(c) => point_facing(st, ws, recv, c, None, h),
-                    None => point_in(st, ws, recv, h),
-                };
+                let (x, px) = point_in(st, ws, recv, hash3(seed, k, 0xC1));
                 let (f, open, s_side, v, d) =
                     flux_at(st, ws, x, px, &e, emit, hash3(seed, k, 0xE1), vis);
                 out.rays += (f > 0.0 || open > 0.0) as u32;
-                out.k[0][s_side] += inv * f * v;
                 out.open += inv * open;
+                let turned_away = at.is_some_and(|c| {
+                    px < st.polygons && {
+                        let rec = st.polygon(ws, px);
+                        State::sides(Elem(rec.root)) == 1 && Vec3::from(rec.normal).dot(c - x) < 0.0
+                    }
+                });
+                if turned_away {
+                    deferred[s_side].0 += inv * f;
+                    deferred[s_side].1 += d * f;
+                    continue;
+                }
+                seen += f * v;
+                facing += f;
+                out.k[0][s_side] += inv * f * v;
                 out.partial |= v < 1.0 && open > 0.0;
                 sum += d * (f * v);
                 weight += f * v;
+            }
+            if deferred.iter().any(|d| d.0 > 0.0) {
+                let v = if facing > 0.0 { seen / facing } else { 1.0 };
+                out.partial |= v < 1.0;
+                for (side, (f, d)) in deferred.into_iter().enumerate() {
+                    out.k[0][side] += f * v;
+                    sum += d * v;
+                    weight += f * v / inv;
+                }
             }
             // With every sample hidden, the open light's direction still orients the polygons.
             if weight > 0.0 {

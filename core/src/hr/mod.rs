@@ -147,6 +147,9 @@ pub struct Stats {
     /// The estimated change still to come in the last solution, relative to the largest
     /// radiosity (the geometric tail of the last iterations' changes).
     pub remaining_change: f32,
+    /// True when a radiosity grew without bound (not finite): the solution is meaningless and
+    /// `converged` is false.
+    pub diverged: bool,
     /// Where the power went, per band.
     pub balance: Balance,
 }
@@ -496,6 +499,9 @@ where
         let refined = refine::refine_until_stable(&mut st, ws, &vis, &mut seq, progress);
         closure::update(&mut st, ws, &mut seq, progress);
         solve::iterate(&mut st, ws, &mut seq, progress);
+        if st.stats.diverged {
+            break;
+        }
         st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
         if !refined && round > 0 {
             break;

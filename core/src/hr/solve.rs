@@ -65,6 +65,14 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         iterations = it + 1;
         st.stats.iterations += 1;
         progress.report("solving (iterations)", it as u64 + 1, 0);
+        if !(change.is_finite() && b_max.is_finite()) {
+            // Radiosity without bound (an operator that gives back more than it takes): no
+            // tolerance can be met, and every comparison with it would pass.
+            st.stats.diverged = true;
+            st.stats.converged = false;
+            st.stats.remaining_change = f32::INFINITY;
+            return iterations;
+        }
         let scale = b_max.max(f32::MIN_POSITIVE);
         last_scale = scale;
         let tol = st.settings.tolerance * scale;

@@ -253,6 +253,7 @@ pub fn run(a: Args) -> Result<()> {
             report.workspace_bytes = s.workspace_bytes;
             report.budget_limited = s.budget_limited;
             report.converged = s.converged;
+            report.diverged = s.diverged;
             report.remaining_change = Some(s.remaining_change as f64).filter(|r| r.is_finite());
             report.power = (0..bands)
                 .map(|b| {
@@ -317,6 +318,12 @@ pub fn run(a: Args) -> Result<()> {
                 "note: the workspace budget limited refinement; give more --memory for the full accuracy of this epsilon"
             );
         }
+    }
+    if report.diverged {
+        bail!(
+            "the solution diverged (a radiosity grew without bound after {} iterations): the outputs were written but mean nothing; this is a solver defect, please report the scene",
+            report.iterations
+        );
     }
     if !report.converged {
         bail!(

@@ -78,6 +78,10 @@ pub struct SolveReport {
     /// (the run then ends with an error after writing its outputs).
     #[serde(default = "yes")]
     pub converged: bool,
+    /// True when a radiosity grew without bound (hr): the solution means nothing and the run
+    /// fails.
+    #[serde(default)]
+    pub diverged: bool,
     /// The estimated change still to come, relative to the largest radiosity (hr); `null`
     /// when not estimated.
     #[serde(default)]
@@ -183,6 +187,9 @@ impl SolveReport {
                     p.imbalance_percent
                 )?;
             }
+        }
+        if self.diverged {
+            return writeln!(out, "  DIVERGED: a radiosity grew without bound");
         }
         match (self.converged, self.remaining_change) {
             (true, Some(r)) => writeln!(

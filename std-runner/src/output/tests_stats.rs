@@ -22,6 +22,7 @@ fn report() -> SolveReport {
         max_abs_difference: None,
         worst_polygons: Vec::new(),
         converged: false,
+        diverged: false,
         remaining_change: Some(3e-4),
         power: vec![BandPower {
             band: "nir".into(),
