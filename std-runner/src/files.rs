@@ -213,8 +213,23 @@ pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
     })
 }
 
-/// Flushes a finished temporary file to disk and renames it to `path`.
+/// Flushes a finished temporary file to disk and renames it to `path`. When `path` is a
+/// device or a pipe (`/dev/null`, a FIFO a reader waits on), the finished bytes are written
+/// into it instead: renaming over it would replace it with a file (as root, `/dev/null` for
+/// every program on the machine).
 pub fn persist(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        let mut from = tmp
+            .reopen()
+            .with_context(|| format!("{}: cannot read the finished output back", path.display()))?;
+        let mut to = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .with_context(|| format!("{}: cannot open for writing", path.display()))?;
+        std::io::copy(&mut from, &mut to)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        return Ok(());
+    }
     tmp.as_file()
         .sync_all()
         .with_context(|| format!("{}: cannot write", path.display()))?;

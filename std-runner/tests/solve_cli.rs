@@ -455,3 +455,37 @@ fn power_and_convergence_are_reported_and_a_capped_solve_fails() {
     let err = fails(&["solve", "-q", s(&lossless)]);
     assert!(err.contains("no steady state in band 0"), "{err}");
 }
+
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_a_pipe_or_device_is_written_into_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    // `--results /dev/null` used to rename a file over the device: as root, /dev/null became
+    // a regular file for every program on the machine. A FIFO stands in for it here.
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("results.fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(&fifo).unwrap())
+    };
+    let out = hirad(&[
+        "solve",
+        "-q",
+        s(&fixture("parallel_squares.hir")),
+        "--results",
+        s(&fifo),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = reader.join().unwrap();
+    assert!(text.starts_with("id,area,"), "{text}");
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+}
