@@ -19,6 +19,8 @@
 mod balance;
 mod census;
 mod closure;
+mod cluster_kernel;
+mod cone;
 mod direct;
 mod eval;
 mod exec;

@@ -163,5 +163,5 @@ pub(crate) const EXAMINED: u32 = 2;
 pub(crate) const PARTIAL: u32 = 4;
 /// The record is on the free list.
 pub(crate) const FREE: u32 = 8;
-/// The emitter is a small cluster seen polygon by polygon (see `eval::SMALL_CLUSTER`).
+/// The emitter is a small cluster seen polygon by polygon (see `cluster_kernel::SMALL_CLUSTER`).
 pub(crate) const EXACT: u32 = 16;

@@ -1,0 +1,307 @@
+//! Tests of the obvhs visibility: answers against brute force at several scales, candidates
+//! of a box, coincident polygons.
+
+use super::*;
+use hirad_core::limits::NONE;
+use hirad_core::sampling::hash3;
+
+/// Deterministic numbers in [0, 1) for the random scenes.
+struct Rng(u32, u32);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.1 += 1;
+        (hash3(self.0, self.1, 0x5EED) >> 8) as f32 / 16_777_216.0
+    }
+    fn point(&mut self, size: f32) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next()) * size
+    }
+}
+
+/// A random scene of `n` small triangles and parallelograms in the cube [0, size]^3.
+fn scene(seed: u32, n: usize, size: f32) -> Vec<Vec<Vec3>> {
+    let mut rng = Rng(seed, 0);
+    (0..n)
+        .map(|k| {
+            let a = rng.point(size);
+            let e1 = (rng.point(2.0) - 1.0) * size * 0.2;
+            let e2 = (rng.point(2.0) - 1.0) * size * 0.2;
+            if k % 2 == 0 {
+                vec![a, a + e1, a + e2]
+            } else {
+                vec![a, a + e1, a + e1 + e2, a + e2]
+            }
+        })
+        .collect()
+}
+
+/// Independent reference: the segment's crossing with each triangle's plane, then the
+/// crossing point tested against the edges by signed volumes. `None` when the case is
+/// too close to a boundary (t, or an edge) to compare two different formulations.
+fn reference(polys: &[Vec<Vec3>], from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<f32> {
+    let (o, e) = (from.as_dvec3(), to.as_dvec3());
+    let mut blocked = false;
+    for (id, p) in polys.iter().enumerate() {
+        if skip.contains(&(id as u32)) {
+            continue;
+        }
+        let tris: &[[usize; 3]] = if p.len() == 4 {
+            &[[0, 1, 2], [0, 2, 3]]
+        } else {
+            &[[0, 1, 2]]
+        };
+        for t in tris {
+            let (a, b, c) = (p[t[0]].as_dvec3(), p[t[1]].as_dvec3(), p[t[2]].as_dvec3());
+            let n = (b - a).cross(c - a);
+            let (so, se) = (n.dot(o - a), n.dot(e - a));
+            if so == se || (so > 0.0) == (se > 0.0) && so != 0.0 && se != 0.0 {
+                continue;
+            }
+            let t = so / (so - se);
+            let m = T_MARGIN as f64;
+            if (t - m).abs() < 1e-4 || (t - (1.0 - m)).abs() < 1e-4 {
+                return None;
+            }
+            if t <= m || t >= 1.0 - m {
+                continue;
+            }
+            let x = o + (e - o) * t;
+            let w = [
+                (b - a).cross(x - a).dot(n),
+                (c - b).cross(x - b).dot(n),
+                (a - c).cross(x - c).dot(n),
+            ];
+            let scale = n.length_squared();
+            if w.iter().any(|v| v.abs() < 1e-6 * scale) {
+                return None;
+            }
+            if w.iter().all(|v| *v > 0.0) {
+                blocked = true;
+            }
+        }
+    }
+    Some(if blocked { 0.0 } else { 1.0 })
+}
+
+fn compare(seed: u32, size: f32) -> (usize, usize) {
+    let polys = scene(seed, 200, size);
+    let vis = ObvhsVisibility::new(&polys).unwrap();
+    let mut rng = Rng(seed ^ 0xABCD, 1_000_000);
+    let (mut compared, mut blocked) = (0, 0);
+    for k in 0..2000u32 {
+        // Half the segments start and end on polygons (skipped), half are free.
+        let (from, to, skip) = if k % 2 == 0 {
+            let (i, j) = (k as usize % polys.len(), (k as usize * 7 + 3) % polys.len());
+            let pi = &polys[i];
+            let pj = &polys[j];
+            let from = (pi[0] + pi[1] + pi[2]) / 3.0;
+            let to = (pj[0] + pj[1] + pj[2]) / 3.0;
+            (from, to, [i as u32, j as u32])
+        } else {
+            (rng.point(size), rng.point(size), [NONE, NONE])
+        };
+        let fast = vis.transmittance(from, to, skip);
+        assert_eq!(fast, vis.brute_force(from, to, skip), "seed {seed} ray {k}");
+        if let Some(r) = reference(&polys, from, to, skip) {
+            assert_eq!(fast, r, "seed {seed} ray {k} size {size}");
+            compared += 1;
+            blocked += (fast == 0.0) as usize;
+        }
+    }
+    (compared, blocked)
+}
+
+#[test]
+fn agrees_with_brute_force_on_random_scenes_at_any_scale() {
+    for seed in 0..4 {
+        for size in [1.0, 1e-3, 1e3] {
+            let (compared, blocked) = compare(seed, size);
+            // Nearly every case is comparable, and both outcomes occur often.
+            assert!(compared > 1900, "{compared}");
+            assert!(blocked > 200 && blocked < compared - 200, "{blocked}");
+        }
+    }
+}
+
+#[test]
+fn candidates_of_a_box_give_the_same_answers() {
+    for (seed, size) in [(11, 1.0f32), (12, 1e-3), (13, 1e3)] {
+        let polys = scene(seed, 300, size);
+        let vis = ObvhsVisibility::new(&polys).unwrap();
+        let mut rng = Rng(seed, 5_000_000);
+        let mut out = Vec::new();
+        let mut empty = 0;
+        for k in 0..400u32 {
+            let lo = rng.point(size);
+            let hi = lo + rng.point(size * 0.05);
+            let skip = [k % 300, NONE];
+            vis.candidates(lo, hi, skip, &mut out);
+            empty += out.is_empty() as usize;
+            // Every polygon whose own box overlaps the query is a candidate.
+            for (id, p) in polys.iter().enumerate() {
+                let (mut a, mut b) = (p[0], p[0]);
+                for v in p {
+                    a = a.min(*v);
+                    b = b.max(*v);
+                }
+                let overlaps = a.cmple(hi).all() && lo.cmple(b).all();
+                if overlaps && !skip.contains(&(id as u32)) {
+                    assert!(out.binary_search(&(id as u32)).is_ok(), "{id}");
+                }
+            }
+            // Segments inside the box: the candidates decide exactly as the BVH does.
+            for _ in 0..20 {
+                let t = |r: &mut Rng| lo + (hi - lo) * Vec3::new(r.next(), r.next(), r.next());
+                let (a, b) = (t(&mut rng), t(&mut rng));
+                assert_eq!(
+                    vis.transmittance_among(a, b, &out),
+                    vis.transmittance(a, b, skip)
+                );
+            }
+        }
+        assert!(empty > 20 && empty < 380, "{empty}");
+    }
+}
+
+#[test]
+fn same_answer_in_millimetres_and_kilometres() {
+    let polys = scene(9, 100, 1.0);
+    let scaled = |s: f32| -> Vec<Vec<Vec3>> {
+        polys
+            .iter()
+            .map(|p| p.iter().map(|v| *v * s).collect())
+            .collect()
+    };
+    let (small, big) = (scaled(1.0 / 1024.0), scaled(1024.0));
+    let (vs, vb) = (
+        ObvhsVisibility::new(&small).unwrap(),
+        ObvhsVisibility::new(&big).unwrap(),
+    );
+    let v1 = ObvhsVisibility::new(&polys).unwrap();
+    let mut rng = Rng(77, 0);
+    for _ in 0..2000 {
+        let (a, b) = (rng.point(1.0), rng.point(1.0));
+        let r = v1.transmittance(a, b, [NONE, NONE]);
+        // Powers of two scale exactly, so the answers are identical.
+        assert_eq!(vs.transmittance(a / 1024.0, b / 1024.0, [NONE, NONE]), r);
+        assert_eq!(vb.transmittance(a * 1024.0, b * 1024.0, [NONE, NONE]), r);
+    }
+}
+
+#[test]
+fn margins_are_relative_to_the_segment() {
+    // A unit square in z = 0, and segments crossing it at chosen parameters.
+    let sq = vec![vec![
+        Vec3::new(-1., -1., 0.),
+        Vec3::new(1., -1., 0.),
+        Vec3::new(1., 1., 0.),
+        Vec3::new(-1., 1., 0.),
+    ]];
+    let v = ObvhsVisibility::new(&sq).unwrap();
+    let none = [NONE, NONE];
+    for len in [1e-3f32, 1.0, 1e3] {
+        let seg = |t_cross: f32| {
+            let from = Vec3::new(0.1, 0.2, -t_cross * len);
+            (from, from + Vec3::new(0.0, 0.0, len))
+        };
+        for (t, expect) in [
+            (0.5, 0.0),
+            (1.1e-5, 0.0),
+            (1.0 - 1.1e-5, 0.0),
+            (5e-6, 1.0),
+            (1.0 - 5e-6, 1.0),
+        ] {
+            let (a, b) = seg(t);
+            assert_eq!(v.transmittance(a, b, none), expect, "t {t} len {len}");
+        }
+    }
+    // The skipped polygon never blocks; a segment beside the square is clear.
+    let (a, b) = (Vec3::new(0., 0., -1.), Vec3::new(0., 0., 1.));
+    assert_eq!(v.transmittance(a, b, [0, NONE]), 1.0);
+    assert_eq!(v.transmittance(a, b, [NONE, 0]), 1.0);
+    assert_eq!(v.transmittance(a, b, none), 0.0);
+    let (a, b) = (Vec3::new(1.5, 0., -1.), Vec3::new(1.5, 0., 1.));
+    assert_eq!(v.transmittance(a, b, none), 1.0);
+    // Through the quad's diagonal (where its two triangles meet): blocked.
+    let (a, b) = (Vec3::new(0.3, 0.3, -1.), Vec3::new(0.3, 0.3, 1.));
+    assert_eq!(v.transmittance(a, b, none), 0.0);
+    // In the plane of the square: never blocked.
+    let (a, b) = (Vec3::new(-2., 0., 0.), Vec3::new(2., 0., 0.));
+    assert_eq!(v.transmittance(a, b, none), 1.0);
+}
+
+#[test]
+fn empty_one_polygon_and_bad_input() {
+    let empty: Vec<Vec<Vec3>> = Vec::new();
+    let v = ObvhsVisibility::new(&empty).unwrap();
+    assert!(v.is_empty());
+    assert_eq!(v.transmittance(Vec3::ZERO, Vec3::ONE, [NONE, NONE]), 1.0);
+    let tri = vec![vec![
+        Vec3::new(0., 0., 1.),
+        Vec3::new(1., 0., 1.),
+        Vec3::new(0., 1., 1.),
+    ]];
+    let v = ObvhsVisibility::new(&tri).unwrap();
+    assert_eq!(v.len(), 1);
+    let p = Vec3::new(0.2, 0.2, 0.0);
+    assert_eq!(v.transmittance(p, p + Vec3::Z * 2.0, [NONE, NONE]), 0.0);
+    assert_eq!(v.transmittance(p, p, [NONE, NONE]), 1.0);
+    let nan = Vec3::splat(f32::NAN);
+    assert_eq!(v.transmittance(nan, p, [NONE, NONE]), 1.0);
+    let bad = vec![vec![Vec3::ZERO, Vec3::X]];
+    assert_eq!(
+        ObvhsVisibility::new(&bad).unwrap_err(),
+        VisibilityError::Corners {
+            polygon: 0,
+            count: 2
+        }
+    );
+    let bad = vec![vec![Vec3::ZERO, Vec3::X, nan]];
+    assert_eq!(
+        ObvhsVisibility::new(&bad).unwrap_err(),
+        VisibilityError::NonFinite { polygon: 0 }
+    );
+}
+
+#[test]
+fn shared_across_threads() {
+    fn is_sync<T: Sync + Send>() {}
+    is_sync::<ObvhsVisibility>();
+}
+
+#[test]
+fn thousands_of_coincident_polygons_are_all_found() {
+    // 3000 copies of one small triangle and a few others: the tree is built over distinct
+    // boxes, so it stays shallow, and every query agrees with testing each polygon.
+    let tri = vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1e-6, 0.0, 0.0),
+        Vec3::new(0.0, 1e-6, 0.0),
+    ];
+    let mut polys = vec![tri.clone(); 3000];
+    polys.push(vec![
+        Vec3::new(-1.0, -1.0, 0.5),
+        Vec3::new(1.0, -1.0, 0.5),
+        Vec3::new(0.0, 1.0, 0.5),
+    ]);
+    let vis = ObvhsVisibility::new(&polys).unwrap();
+    let x = Vec3::new(2e-7, 2e-7, -1.0);
+    let up = Vec3::new(2e-7, 2e-7, 1.0);
+    // Through the stack from below: blocked, first by a copy (lowest id), then the cover.
+    assert_eq!(vis.transmittance(x, up, [NONE, NONE]), 0.0);
+    let hit = vis.first_hit(x, up, [NONE, NONE]).unwrap();
+    assert_eq!(hit, vis.first_hit_brute_force(x, up, [NONE, NONE]).unwrap());
+    assert_eq!(hit.0, 0);
+    // From a copy upwards: the cover.
+    let from = Vec3::new(2e-7, 2e-7, 0.0);
+    let hit = vis.first_hit(from, up, [5, NONE]).unwrap();
+    assert_eq!(hit.0, 3000);
+    let mut candidates = Vec::new();
+    vis.candidates(
+        Vec3::splat(-1e-7),
+        Vec3::splat(2e-6),
+        [NONE, NONE],
+        &mut candidates,
+    );
+    assert_eq!(candidates.len(), 3000);
+}
