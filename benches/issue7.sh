@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # hr right per polygon (issue 7): before and after in one run, both binaries interleaved.
-#   OLD=/path/to/hirad-built-from-6e9e1db bash benches/issue7.sh
+#   OLD=/path/to/hirad-built-from-6e9e1db [NEW_ARGS="--final-rays 0"] bash benches/issue7.sh
+# NEW_ARGS: extra options for the new build only (word-split).
 # References and scenes go to $WORK (default /tmp/hirad-issue7); the exact references take
 # about two minutes the first time. Prints one line per measurement (BENCHMARKS.md).
 set -u
@@ -25,7 +26,7 @@ echo "load: $(cat /proc/loadavg)"
 for e in 1e-3 1e-4 1e-5; do
   for b in OLD NEW; do
     H=${!b}
-    /usr/bin/time -f "%e %M" -o "$W/time.txt" "$H" solve "$CB" --epsilon $e --results "$W/cb_$b.csv" -q --stats "$W/cb_$b.json" 2>/dev/null
+    /usr/bin/time -f "%e %M" -o "$W/time.txt" "$H" solve $([ "$b" = NEW ] && echo "${NEW_ARGS:-}") "$CB" --epsilon $e --results "$W/cb_$b.csv" -q --stats "$W/cb_$b.json" 2>/dev/null
     links=$(python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['links'])" "$W/cb_$b.json")
     r=$(python3 benches/compare.py "$W/cornell_exact.csv" "$W/cb_$b.csv" --skip 10,11 | head -2 | tr '\n' ' ')
     echo "cornell_triangles eps $e $b seconds,rss_kb $(cat "$W/time.txt") links $links | $r"
@@ -33,7 +34,7 @@ for e in 1e-3 1e-4 1e-5; do
 done
 for b in OLD NEW; do
   H=${!b}
-  /usr/bin/time -f "%e %M" -o "$W/time.txt" "$H" solve fixtures/leaves_cluster.hir --results "$W/lv_$b.csv" -q 2>/dev/null
+  /usr/bin/time -f "%e %M" -o "$W/time.txt" "$H" solve $([ "$b" = NEW ] && echo "${NEW_ARGS:-}") fixtures/leaves_cluster.hir --results "$W/lv_$b.csv" -q 2>/dev/null
   python3 -c "
 import csv, sys
 ex = list(csv.DictReader(open(sys.argv[1]))); hr = list(csv.DictReader(open(sys.argv[2])))
@@ -48,12 +49,12 @@ for b in OLD NEW; do
   H=${!b}
   # (The old build has no --max-imbalance; the new one must not fail on the balance here.)
   X=(); [ "$b" = NEW ] && X=(--max-imbalance 100)
-  /usr/bin/time -f "%e %M" -o "$W/time.txt" "$H" solve "$W/poplar.hirb" --results "$W/pop_$b.csv" -q --stats "$W/pop_$b.json" "${X[@]}" 2>/dev/null
+  /usr/bin/time -f "%e %M" -o "$W/time.txt" "$H" solve $([ "$b" = NEW ] && echo "${NEW_ARGS:-}") "$W/poplar.hirb" --results "$W/pop_$b.csv" -q --stats "$W/pop_$b.json" "${X[@]}" 2>/dev/null
   echo "poplar $b seconds,rss_kb $(cat "$W/time.txt") links $(python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['links'])" "$W/pop_$b.json")"
 done
 for b in OLD NEW; do
   H=${!b}
-  /usr/bin/time -f "%e %M" -o "$W/time.txt" timeout 60 "$H" solve "$W/stack10000.hir" --results "$W/st_$b.csv" -q 2>/dev/null
+  /usr/bin/time -f "%e %M" -o "$W/time.txt" timeout 60 "$H" solve $([ "$b" = NEW ] && echo "${NEW_ARGS:-}") "$W/stack10000.hir" --results "$W/st_$b.csv" -q 2>/dev/null
   echo "stack10000 $b exit $? seconds,rss_kb $(tail -1 "$W/time.txt")"
 done
 echo "load: $(cat /proc/loadavg)"

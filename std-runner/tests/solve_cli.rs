@@ -186,6 +186,15 @@ fn bad_options_are_refused() {
     assert!(fails(&["solve", s(&box_), "--epsilon", "0"]).contains("--epsilon"));
     assert!(fails(&["solve", s(&box_), "--epsilon", "nan"]).contains("--epsilon"));
     assert!(fails(&["solve", s(&box_), "--threads", "0"]).contains("--threads"));
+    for bad in ["lots", "2000000", "1.5"] {
+        let out = hirad(&["solve", s(&box_), "--final-rays", bad]);
+        let e = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(out.status.code(), Some(2), "{bad}: {e}");
+        assert!(
+            e.contains("--final-rays") && e.contains("auto"),
+            "{bad}: {e}"
+        );
+    }
     assert!(fails(&["solve", s(&box_), "--memory", "1K"]).contains("needs"));
     assert!(fails(&["solve", s(&box_), "--memory", "9000T"]).contains("cannot allocate"));
     let e = String::from_utf8(hirad(&["solve", s(&box_), "--memory", "lots"]).stderr).unwrap();

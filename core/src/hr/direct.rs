@@ -403,7 +403,7 @@ pub(crate) fn cosine_direction(n: Vec3, u: f32, v: f32) -> Vec3 {
 
 /// Area weight of the sample at `(u, v)`: the Jacobian of the bilinear map on a quad (1 on a
 /// triangle, whose map preserves area).
-fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
+pub(crate) fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
     if corners.len() != 4 {
         return 1.0;
     }
@@ -596,7 +596,7 @@ pub(crate) fn coprime_stride(count: u32, h: u32) -> u32 {
 
 /// The mean of [`jacobian`] over the unit square (exact for a bilinear quad: its value at the
 /// centre).
-fn mean_jacobian(corners: &[Vec3]) -> f32 {
+pub(crate) fn mean_jacobian(corners: &[Vec3]) -> f32 {
     let j = jacobian(corners, 0.5, 0.5);
     if j > 0.0 { j } else { 1.0 }
 }

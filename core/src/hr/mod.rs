@@ -24,6 +24,7 @@ mod cone;
 mod direct;
 mod eval;
 mod exec;
+mod final_gather;
 mod ids;
 mod layout;
 mod load;
@@ -67,9 +68,18 @@ pub struct Settings {
     pub max_rounds: u32,
     /// Most children a cluster keeps before grouping levels are inserted (2..=16).
     pub max_children: u32,
+    /// Final gather rays per receiving side of every input polygon (see `final_gather`):
+    /// 0 leaves each polygon the hierarchy's irradiance, [`Settings::AUTO`] spreads about a
+    /// million rays over the scene (64 to 16,384 per side). Rounded to a square.
+    pub final_rays: u32,
 }
 
 impl Settings {
+    /// [`Settings::final_rays`] chosen from the scene's size.
+    pub const AUTO: u32 = u32::MAX;
+    /// Most final gather rays per side one may ask for.
+    pub const MAX_FINAL_RAYS: u32 = 1 << 20;
+
     /// Checks every setting's range.
     pub fn check(&self) -> Result<(), HrError> {
         if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
@@ -90,6 +100,11 @@ impl Settings {
         if !(2..=16).contains(&self.max_children) {
             return Err(HrError::Settings("max_children must lie in 2..=16"));
         }
+        if self.final_rays > Self::MAX_FINAL_RAYS && self.final_rays != Self::AUTO {
+            return Err(HrError::Settings(
+                "final_rays must lie in 0..=1048576 (or be Settings::AUTO)",
+            ));
+        }
         Ok(())
     }
 }
@@ -105,6 +120,7 @@ impl Default for Settings {
             max_iterations: 20_000,
             max_rounds: 24,
             max_children: 8,
+            final_rays: Settings::AUTO,
         }
     }
 }
@@ -517,6 +533,11 @@ where
     st.stats.emitted_power = st.power;
     st.stats.balance = balance::measure(&st, ws, &vis, &mut seq, 4 * settings.rays, progress);
     progress.report("writing (polygons)", 0, st.polygons as u64);
-    output::emit(&st, ws, sink).map_err(SolveError::Sink)?;
+    let written =
+        output::emit(&st, ws, &vis, &mut seq, progress, sink).map_err(SolveError::Sink)?;
+    st.stats.rays += written.rays;
+    if let Some(absorbed) = written.absorbed {
+        st.stats.balance.absorbed = absorbed;
+    }
     Ok(st.stats)
 }

@@ -1,82 +1,206 @@
 //! Handing the finished solution to the sink: every input polygon in global-id order, its
-//! leaf patches first, then its area-weighted means (buried parts count as dark).
+//! leaf patches first, then its area-weighted means (buried parts count as dark). With the
+//! final gather on, a polygon's irradiance is its own gathered light (see `final_gather`)
+//! and its radiosity follows from its material.
 
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::final_gather::{Emitters, emitters, polygon as gather_polygon, rays_per_side};
 use super::ids::Elem;
+use super::layout::CHUNK;
 use super::state::State;
-use crate::limits::NONE;
+use super::vis::{Ray, Vis, WsPolygons};
+use crate::limits::MAX_BANDS;
 use crate::sink::{PatchResult, PolygonResult, Sink};
+use crate::visibility::Visibility;
 use glam::Vec3;
 
-pub(crate) fn emit<K: Sink>(st: &State, ws: &[u8], sink: &mut K) -> Result<(), K::Error> {
+/// What the output pass measured: the power absorbed by the receiving sides as written (W
+/// per band; `None` without a final gather, when the solution's own balance stands) and the
+/// rays it cast.
+pub(crate) struct Written {
+    pub absorbed: Option<[f64; MAX_BANDS]>,
+    pub rays: u64,
+}
+
+struct Ctx<'a, 'v, V: ?Sized> {
+    st: &'a State,
+    ws: &'a [u8],
+    vis: &'a Vis<'v, V>,
+    em: Emitters,
+    rays: u32,
+}
+
+/// Hands every polygon to `sink`, gathering each one's light first when the settings ask
+/// for a final gather (chunks of polygons in parallel, handed over in order).
+pub(crate) fn emit<K: Sink, V: Visibility + ?Sized, E: Executor>(
+    st: &State,
+    ws: &[u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+    sink: &mut K,
+) -> Result<Written, K::Error> {
     let nb = st.bands;
-    for i in 0..st.polygons {
-        let poly = st.polygon(ws, i);
-        let root = Elem(poly.root);
-        let sides = State::sides(root);
-        let normal = Vec3::from(poly.normal);
-        let m = st.material(ws, poly.material);
-        let (mut b_sum, mut h_sum) = ([[0.0f64; 8]; 2], [[0.0f64; 8]; 2]);
-        let mut area = 0.0f64;
-        // Depth-first over the quadtree: at most 3 pending siblings per level.
-        let mut stack: heapless::Vec<u32, 256> = heapless::Vec::new();
-        let _ = stack.push(root.0);
-        while let Some(raw) = stack.pop() {
-            let e = Elem(raw);
-            let p = st.patch(ws, e);
-            if p.first_child != NONE {
-                for j in (0..4).rev() {
-                    let _ = stack.push(Elem::new(e.kind(), p.first_child + j).0);
-                }
-                continue;
+    let rays = rays_per_side(st, ws);
+    let mut ctx = Ctx {
+        st,
+        ws,
+        vis,
+        em: emitters(st, ws),
+        rays,
+    };
+    let per = 2 * nb + 1;
+    let n = st.polygons as usize;
+    let mut failed: Option<K::Error> = None;
+    let mut absorbed = [0.0f64; MAX_BANDS];
+    let mut cast = 0u64;
+    run_chunks(
+        ex,
+        &mut ctx,
+        n.div_ceil(CHUNK),
+        CHUNK * per,
+        |c: &Ctx<'_, '_, V>, chunk, buf| {
+            buf.fill(0.0);
+            if c.rays == 0 {
+                return;
             }
-            let mut corners = [Vec3::ZERO; 4];
-            for (c, src) in corners.iter_mut().zip(p.corners) {
-                *c = src.into();
-            }
-            let front = st.b(ws, e, 0).unwrap_or(&[]);
-            let back = if sides == 2 {
-                st.b(ws, e, 1).unwrap_or(&[])
-            } else {
-                &[]
+            let ray = Ray {
+                vis: c.vis,
+                polys: WsPolygons { st: c.st, ws: c.ws },
             };
-            sink.patch(&PatchResult {
-                id: i as u64,
-                corners: &corners[..p.corner_count()],
-                normal,
-                radiosity: [front, back],
-            })?;
-            // Buried parts receive nothing and show only their emission.
-            let a = p.area as f64;
-            let seen = a * p.exposed as f64;
-            area += a;
-            for side in 0..sides {
-                let b = st.b(ws, e, side).unwrap_or(&[]);
-                let mut h = [0.0f32; 8];
-                super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
-                for k in 0..nb {
-                    let bk = b.get(k).copied().unwrap_or(0.0) as f64;
-                    b_sum[side][k] += seen * bk + (a - seen) * m.emit[side][k] as f64;
-                    h_sum[side][k] += seen * h[k] as f64;
+            for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                let o = &mut buf[slot * per..(slot + 1) * per];
+                let r = gather_polygon(c.st, c.ws, &ray, i as u32, c.rays, &c.em, &mut o[1..]);
+                o[0] = r as f32;
+            }
+        },
+        |c: &mut Ctx<'_, '_, V>, chunk, buf| {
+            for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                if failed.is_some() {
+                    return;
+                }
+                let o = &buf[slot * per..(slot + 1) * per];
+                let gathered = (c.rays > 0).then(|| &o[1..]);
+                cast += o[0] as u64;
+                if let Err(e) = polygon(c.st, c.ws, i as u32, gathered, sink, &mut absorbed) {
+                    failed = Some(e);
+                }
+            }
+        },
+        &mut |done, total| {
+            progress.report(
+                if rays > 0 {
+                    "final gather (polygons)"
+                } else {
+                    "writing (polygons)"
+                },
+                (done * CHUNK).min(n) as u64,
+                (total * CHUNK).min(n) as u64,
+            )
+        },
+    );
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    Ok(Written {
+        absorbed: (rays > 0).then_some(absorbed),
+        rays: cast,
+    })
+}
+
+/// Hands polygon `i` (its leaf patches, then its means) to `sink`; with `gathered` (its
+/// final gather, per side and band, without suns and sky) its irradiance is that plus its
+/// patches' direct light. Adds what its receiving sides absorb to `absorbed`.
+fn polygon<K: Sink>(
+    st: &State,
+    ws: &[u8],
+    i: u32,
+    gathered: Option<&[f32]>,
+    sink: &mut K,
+    absorbed: &mut [f64; MAX_BANDS],
+) -> Result<(), K::Error> {
+    let nb = st.bands;
+    let poly = st.polygon(ws, i);
+    let root = Elem(poly.root);
+    let sides = State::sides(root);
+    let normal = Vec3::from(poly.normal);
+    let m = st.material(ws, poly.material);
+    let (mut b_sum, mut h_sum) = ([[0.0f64; 8]; 2], [[0.0f64; 8]; 2]);
+    let mut d_sum = [[0.0f64; 8]; 2];
+    let mut area = 0.0f64;
+    for (e, p) in st.leaves(ws, root) {
+        let mut corners = [Vec3::ZERO; 4];
+        for (c, src) in corners.iter_mut().zip(p.corners) {
+            *c = src.into();
+        }
+        let front = st.b(ws, e, 0).unwrap_or(&[]);
+        let back = if sides == 2 {
+            st.b(ws, e, 1).unwrap_or(&[])
+        } else {
+            &[]
+        };
+        sink.patch(&PatchResult {
+            id: i as u64,
+            corners: &corners[..p.corner_count()],
+            normal,
+            radiosity: [front, back],
+        })?;
+        // Buried parts receive nothing and show only their emission.
+        let a = p.area as f64;
+        let seen = a * p.exposed as f64;
+        area += a;
+        for side in 0..sides {
+            let b = st.b(ws, e, side).unwrap_or(&[]);
+            let mut h = [0.0f32; 8];
+            super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
+            for k in 0..nb {
+                let bk = b.get(k).copied().unwrap_or(0.0) as f64;
+                b_sum[side][k] += seen * bk + (a - seen) * m.emit[side][k] as f64;
+                h_sum[side][k] += seen * h[k] as f64;
+            }
+            if let Some(d) = st.direct(ws, e, side) {
+                for (ds, dk) in d_sum[side][..nb].iter_mut().zip(d) {
+                    *ds += seen * *dk as f64;
                 }
             }
         }
-        let inv = if area > 0.0 { 1.0 / area } else { 0.0 };
-        let mut b = [[0.0f32; 8]; 2];
-        let mut h = [[0.0f32; 8]; 2];
+    }
+    let inv = if area > 0.0 { 1.0 / area } else { 0.0 };
+    let mut b = [[0.0f32; 8]; 2];
+    let mut h = [[0.0f32; 8]; 2];
+    for side in 0..sides {
+        for k in 0..nb {
+            b[side][k] = (b_sum[side][k] * inv) as f32;
+            h[side][k] = (h_sum[side][k] * inv) as f32;
+        }
+    }
+    if let Some(g) = gathered {
+        // The polygon's own light: gathered, plus the direct light of its patches.
         for side in 0..sides {
             for k in 0..nb {
-                b[side][k] = (b_sum[side][k] * inv) as f32;
-                h[side][k] = (h_sum[side][k] * inv) as f32;
+                h[side][k] = g[side * nb + k] + (d_sum[side][k] * inv) as f32;
             }
         }
-        let back = if sides == 2 { nb } else { 0 };
-        sink.polygon(&PolygonResult {
-            id: i as u64,
-            area: st.patch(ws, root).area,
-            two_sided: sides == 2,
-            radiosity: [&b[0][..nb], &b[1][..back]],
-            irradiance: [&h[0][..nb], &h[1][..back]],
-        })?;
+        for side in 0..sides {
+            for k in 0..nb {
+                let other = if sides == 2 { h[1 - side][k] } else { 0.0 };
+                b[side][k] = m.emit[side][k] + m.rho[side][k] * h[side][k] + m.tau[k] * other;
+            }
+        }
     }
+    for (side, hs) in h.iter().enumerate().take(sides) {
+        for k in 0..nb {
+            let absorb = 1.0 - m.rho[side][k] as f64 - m.tau[k] as f64;
+            absorbed[k] += area * absorb * hs[k] as f64;
+        }
+    }
+    let back = if sides == 2 { nb } else { 0 };
+    sink.polygon(&PolygonResult {
+        id: i as u64,
+        area: st.patch(ws, root).area,
+        two_sided: sides == 2,
+        radiosity: [&b[0][..nb], &b[1][..back]],
+        irradiance: [&h[0][..nb], &h[1][..back]],
+    })?;
     Ok(())
 }

@@ -276,6 +276,17 @@ impl State {
         floats_mut(ws, at, self.bands)
     }
 
+    /// The leaf patches of the quadtree under `root`, depth first, children in order.
+    pub(crate) fn leaves<'a>(&'a self, ws: &'a [u8], root: Elem) -> Leaves<'a> {
+        let mut stack = heapless::Vec::new();
+        let _ = stack.push(root.0);
+        Leaves {
+            st: self,
+            ws,
+            stack,
+        }
+    }
+
     pub(crate) fn patch(&self, ws: &[u8], e: Elem) -> Patch {
         read(ws, self.at(ws, e))
     }
@@ -418,5 +429,30 @@ impl State {
         } else {
             Elem::new(Kind::Patch2, (i - c - p1) as u32)
         }
+    }
+}
+
+/// See [`State::leaves`]. Depth first: at most 3 pending siblings per level.
+pub(crate) struct Leaves<'a> {
+    st: &'a State,
+    ws: &'a [u8],
+    stack: heapless::Vec<u32, 256>,
+}
+
+impl Iterator for Leaves<'_> {
+    type Item = (Elem, Patch);
+
+    fn next(&mut self) -> Option<(Elem, Patch)> {
+        while let Some(raw) = self.stack.pop() {
+            let e = Elem(raw);
+            let p = self.st.patch(self.ws, e);
+            if p.first_child == NONE {
+                return Some((e, p));
+            }
+            for j in (0..4).rev() {
+                let _ = self.stack.push(Elem::new(e.kind(), p.first_child + j).0);
+            }
+        }
+        None
     }
 }

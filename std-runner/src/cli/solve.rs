@@ -69,6 +69,11 @@ pub struct Args {
     /// Visibility rays per receiver point and link.
     #[arg(long, default_value_t = Settings::default().rays)]
     pub rays: u32,
+    /// Final gather (hr): rays per receiving side of every polygon, from which each polygon
+    /// takes its own light; `auto` spreads about a million rays over the scene (64 to 16384
+    /// per side), `0` keeps the hierarchy's irradiance (faster, right on average only).
+    #[arg(long, default_value = "auto", value_parser = parse_final_rays)]
+    pub final_rays: u32,
     /// Smallest patch (hr), as a fraction of the scene's total polygon area.
     #[arg(long, default_value_t = Settings::default().min_area)]
     pub min_area: f32,
@@ -228,6 +233,7 @@ pub fn run(a: Args) -> Result<()> {
             let settings = Settings {
                 epsilon: a.epsilon,
                 rays: a.rays,
+                final_rays: a.final_rays,
                 min_area: a.min_area,
                 tolerance: a.tolerance,
                 max_iterations: a.max_iterations,
@@ -365,4 +371,18 @@ pub fn run(a: Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `--final-rays`: `auto` or a count in 0..=1048576.
+fn parse_final_rays(s: &str) -> Result<u32, String> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(Settings::AUTO);
+    }
+    match s.parse::<u32>() {
+        Ok(n) if n <= Settings::MAX_FINAL_RAYS => Ok(n),
+        _ => Err(format!(
+            "expected `auto` or a whole number of rays from 0 to {}",
+            Settings::MAX_FINAL_RAYS
+        )),
+    }
 }

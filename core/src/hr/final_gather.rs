@@ -1,0 +1,461 @@
+//! The final gather: every input polygon's irradiance from rays of its own into the solved
+//! scene, so that each polygon gets the light its own position, orientation and side see.
+//!
+//! The hierarchy gets radiosities right where they come from, but a polygon that receives
+//! through a coarse link (a cluster's share by its cosine, a floor's mean beside a contact
+//! shadow, a few visibility rays for a whole plant) gets its link's average: right on
+//! average, wrong by tens of percent for one stem or one shaded leaf. Here each receiving
+//! side of each polygon casts stratified, cosine-distributed rays from stratified points and
+//! takes, for each, the solved radiosity of the patch it meets (its side; nothing from the
+//! back of a one-sided polygon or from outside the scene). Emission is taken apart where
+//! there are few emitting polygons: rays count only what the hit reflects, and each point
+//! adds the light of the emitting polygons directly (exact unoccluded form factor times a
+//! visibility ray), so a small bright lamp costs no noise. The light of suns and sky is the
+//! patches' own direct light (see `direct`).
+//!
+//! Samples come from hashes of the polygon and the sample number: results never depend on
+//! the thread count.
+
+use super::direct::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
+use super::ids::Elem;
+use super::state::State;
+use crate::formfactor::{facing_side, point_polygon};
+use crate::limits::NONE;
+use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// Emitting polygons up to which their light is added directly; with more, the rays gather
+/// emission with the rest (many emitters are large or dim, and their light is smooth).
+pub(crate) const MAX_DIRECT_EMITTERS: usize = 64;
+
+/// Rays for the whole scene when the count per side is chosen automatically.
+const AUTO_BUDGET: u64 = 1 << 20;
+/// Fewest and most rays per receiving side when chosen automatically.
+const AUTO_MIN: u32 = 64;
+const AUTO_MAX: u32 = 16_384;
+
+/// The emitting polygons whose light is added directly, or none when there are more than
+/// [`MAX_DIRECT_EMITTERS`] (then `count` is 0 and `direct` false).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Emitters {
+    pub ids: [u32; MAX_DIRECT_EMITTERS],
+    pub count: usize,
+    pub direct: bool,
+}
+
+/// Finds the scene's emitting polygons (see [`Emitters`]).
+pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
+    let mut out = Emitters {
+        ids: [NONE; MAX_DIRECT_EMITTERS],
+        count: 0,
+        direct: true,
+    };
+    for i in 0..st.polygons {
+        let m = st.material(ws, st.polygon(ws, i).material);
+        let emits = (0..st.bands).any(|b| m.emit[0][b] > 0.0 || m.emit[1][b] > 0.0);
+        if emits {
+            if out.count == MAX_DIRECT_EMITTERS {
+                return Emitters {
+                    ids: [NONE; MAX_DIRECT_EMITTERS],
+                    count: 0,
+                    direct: false,
+                };
+            }
+            out.ids[out.count] = i;
+            out.count += 1;
+        }
+    }
+    out
+}
+
+/// Rays per receiving side: the setting, or (for [`super::Settings::AUTO`]) about
+/// [`AUTO_BUDGET`] over all receiving sides, within [`AUTO_MIN`]..=[`AUTO_MAX`]. Rounded to
+/// a square (points and directions are both stratified on a grid).
+pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
+    let asked = st.settings.final_rays;
+    if asked == 0 {
+        return 0;
+    }
+    let n = if asked == super::Settings::AUTO {
+        let mut sides = 0u64;
+        for i in 0..st.polygons {
+            sides += State::sides(Elem(st.polygon(ws, i).root)) as u64;
+        }
+        (AUTO_BUDGET / sides.max(1)).clamp(AUTO_MIN as u64, AUTO_MAX as u64) as u32
+    } else {
+        asked
+    };
+    let g = libm::roundf(libm::sqrtf(n as f32)).max(1.0) as u32;
+    g * g
+}
+
+/// Gathers polygon `poly`'s irradiance (W/m^2, per side and band, the mean over its whole
+/// area) into `out[side * bands + band]`, without the direct light of suns and sky. Returns
+/// the rays cast.
+///
+/// The samples are spread over the polygon's leaf patches by area, at least one per leaf:
+/// the hierarchy subdivided where the light varies (beside a lamp, at a shadow edge), so a
+/// peak that uniform samples of a large polygon would miss gets its own.
+pub(crate) fn polygon<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    vis: &V,
+    poly: u32,
+    rays: u32,
+    em: &Emitters,
+    out: &mut [f32],
+) -> u32 {
+    let nb = st.bands;
+    out.fill(0.0);
+    let rec = st.polygon(ws, poly);
+    let root = Elem(rec.root);
+    let total_area = st.patch(ws, root).area as f64;
+    let normal = Vec3::from(rec.normal);
+    let mut cast = 0u32;
+    let mut sums = [[0.0f64; 8]; 2];
+    let mut area = 0.0f64;
+    let mut leaf_no = 0u32;
+    for (e, p) in st.leaves(ws, root) {
+        let (corners, k) = root_corners(st, ws, e);
+        let a = p.area as f64;
+        area += a;
+        let share = if total_area > 0.0 {
+            rays as f64 * a / total_area
+        } else {
+            rays as f64
+        };
+        let g = libm::ceil(libm::sqrt(share)).max(1.0) as u32;
+        leaf_no += 1;
+        for (side, sum) in sums.iter_mut().enumerate().take(State::sides(root)) {
+            let nrm = if side == 0 { normal } else { -normal };
+            let seed = hash3(poly, leaf_no, 0xF1A1 + side as u32);
+            let mut c = [0.0f64; 8];
+            cast += leaf(
+                st,
+                ws,
+                vis,
+                poly,
+                &corners[..k],
+                nrm,
+                g,
+                seed,
+                em,
+                &mut c[..nb],
+            );
+            for (sb, cb) in sum[..nb].iter_mut().zip(&c[..nb]) {
+                *sb += a * cb;
+            }
+        }
+    }
+    if area > 0.0 {
+        for side in 0..State::sides(root) {
+            for b in 0..nb {
+                out[side * nb + b] = (sums[side][b] / area) as f32;
+            }
+        }
+    }
+    cast
+}
+
+/// The mean irradiance over one leaf patch (`corners`) on the side facing `nrm`, from
+/// `g x g` samples: points on one stratified grid, cosine-distributed directions on another,
+/// paired through a coprime stride. Returns the rays cast.
+#[allow(clippy::too_many_arguments)]
+fn leaf<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    vis: &V,
+    poly: u32,
+    corners: &[Vec3],
+    nrm: Vec3,
+    g: u32,
+    seed: u32,
+    em: &Emitters,
+    out: &mut [f64],
+) -> u32 {
+    let nb = st.bands;
+    let n = g * g;
+    let mj = mean_jacobian(corners);
+    let stride = coprime_stride(n, hash3(seed, 1, 0x57));
+    let mut weight = 0.0f64;
+    let mut cast = 0u32;
+    let mut shares = [Share::default(); MAX_DIRECT_EMITTERS];
+    let total = if em.direct {
+        emitter_shares(st, ws, poly, corners, nrm, em, &mut shares)
+    } else {
+        0.0
+    };
+    for j in 0..n {
+        let cell = ((j as u64 * stride as u64) % n as u64) as u32;
+        let (ju, jv) = unit2(hash3(seed, j, 0xA3));
+        let u = ((cell % g) as f32 + ju) / g as f32;
+        let v = ((cell / g) as f32 + jv) / g as f32;
+        let x = point_on(corners, u, v);
+        let w = (jacobian(corners, u, v) / mj) as f64;
+        weight += w;
+        let (du, dv) = unit2(hash3(seed, j, 0xD7));
+        let du = ((j % g) as f32 + du) / g as f32;
+        let dv = ((j / g) as f32 + dv) / g as f32;
+        let d = cosine_direction(nrm, du, dv);
+        let mut c = [0.0f32; 8];
+        cast += 1;
+        let end = st.beyond(x, d);
+        if let Some((hit, t)) = vis.first_hit(x, end, [poly, NONE])
+            && hit < st.polygons
+        {
+            let y = x + (end - x) * t;
+            let hp = st.polygon(ws, hit);
+            let front = Vec3::from(hp.normal).dot(d) < 0.0;
+            let hroot = Elem(hp.root);
+            let hside = if front { 0 } else { 1 };
+            if hside < State::sides(hroot) {
+                let at = leaf_at(st, ws, hroot, y, Vec3::from(hp.normal));
+                let m = st.material(ws, hp.material);
+                if let Some(b) = st.b(ws, at, hside) {
+                    for k in 0..nb {
+                        let e = if em.direct { m.emit[hside][k] } else { 0.0 };
+                        c[k] = (b[k] - e).max(0.0);
+                    }
+                }
+            }
+        }
+        if total > 0.0 {
+            let h = hash3(seed, j, 0xE3);
+            let pick = (j as f32 + unit2(h).0) / n as f32;
+            let leaf = Receiver {
+                poly,
+                corners,
+                nrm,
+                x,
+            };
+            cast += emitted_light(
+                st,
+                ws,
+                vis,
+                &leaf,
+                em,
+                &shares,
+                total,
+                pick,
+                h,
+                &mut c[..nb],
+            );
+        }
+        for k in 0..nb {
+            out[k] += w * c[k] as f64;
+        }
+    }
+    if weight > 0.0 {
+        for o in out.iter_mut() {
+            *o /= weight;
+        }
+    }
+    cast
+}
+
+/// One emitting polygon as a leaf patch sees it: its importance (largest exitance x
+/// estimated unoccluded form factor from the leaf), the side it shows, and whether its light
+/// is integrated from the emitter's side (an emitter no larger than the leaf: reciprocity,
+/// smooth where a point-by-point form factor would peak under a small lamp).
+#[derive(Clone, Copy, Debug, Default)]
+struct Share {
+    weight: f32,
+    side: usize,
+    reciprocal: bool,
+}
+
+/// A receiving leaf patch and one sample point of it.
+struct Receiver<'a> {
+    poly: u32,
+    corners: &'a [Vec3],
+    nrm: Vec3,
+    x: Vec3,
+}
+
+/// Fills `shares` for a leaf patch (`corners`, receiving normal `nrm`); returns their sum.
+fn emitter_shares(
+    st: &State,
+    ws: &[u8],
+    poly: u32,
+    corners: &[Vec3],
+    nrm: Vec3,
+    em: &Emitters,
+    shares: &mut [Share; MAX_DIRECT_EMITTERS],
+) -> f32 {
+    let nb = st.bands;
+    let centre = corners.iter().copied().sum::<Vec3>() / corners.len() as f32;
+    let area = polygon_area(corners);
+    let mut total = 0.0f32;
+    for (s, &l) in shares.iter_mut().zip(&em.ids[..em.count]) {
+        *s = Share::default();
+        if l == poly {
+            continue;
+        }
+        let lp = st.polygon(ws, l);
+        let (lc, k) = root_corners(st, ws, Elem(lp.root));
+        let l_normal = Vec3::from(lp.normal);
+        let Some(side) = facing_side(centre, lc[0], l_normal) else {
+            continue;
+        };
+        let m = st.material(ws, lp.material);
+        let e_max = m.emit[side][..nb].iter().copied().fold(0.0f32, f32::max);
+        if e_max <= 0.0 {
+            continue;
+        }
+        let l_area = polygon_area(&lc[..k]);
+        let reciprocal = l_area <= area;
+        let f = if reciprocal && area > 0.0 {
+            let lcen = lc[..k].iter().copied().sum::<Vec3>() / k as f32;
+            let ln = if side == 0 { l_normal } else { -l_normal };
+            l_area * point_polygon(lcen, ln, corners) / area
+        } else {
+            point_polygon(centre, nrm, &lc[..k])
+        };
+        // Seen at the centre or not, a part of the emitter may show elsewhere on the leaf:
+        // keep a floor so that it can still be drawn.
+        let f = if f.is_finite() { f.max(1e-6) } else { 0.0 };
+        *s = Share {
+            weight: e_max * f,
+            side,
+            reciprocal,
+        };
+        total += e_max * f;
+    }
+    total
+}
+
+/// The area of a planar triangle or quad (m^2).
+fn polygon_area(c: &[Vec3]) -> f32 {
+    let mut a = Vec3::ZERO;
+    for i in 1..c.len() - 1 {
+        a += (c[i] - c[0]).cross(c[i + 1] - c[0]);
+    }
+    0.5 * a.length()
+}
+
+/// Adds to `c` the irradiance at the leaf's sample from the emitting polygons: one emitter
+/// drawn by its share (`pick` in [0, 1)), its light at the point (exact unoccluded form
+/// factor from the point) or over the leaf (from a point of the emitter, by reciprocity),
+/// times one visibility ray. Returns the rays cast.
+#[allow(clippy::too_many_arguments)]
+fn emitted_light<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    vis: &V,
+    leaf: &Receiver<'_>,
+    em: &Emitters,
+    shares: &[Share; MAX_DIRECT_EMITTERS],
+    total: f32,
+    pick: f32,
+    h: u32,
+    c: &mut [f32],
+) -> u32 {
+    let nb = st.bands;
+    let target = pick * total;
+    let mut acc = 0.0f32;
+    let mut chosen = NONE as usize;
+    for (i, s) in shares[..em.count].iter().enumerate() {
+        if s.weight > 0.0 {
+            acc += s.weight;
+            chosen = i;
+            if target < acc {
+                break;
+            }
+        }
+    }
+    if chosen == NONE as usize {
+        return 0;
+    }
+    let share = shares[chosen];
+    let l = em.ids[chosen];
+    let lp = st.polygon(ws, l);
+    let (lc, k) = root_corners(st, ws, Elem(lp.root));
+    let m = st.material(ws, lp.material);
+    let (x, n) = (leaf.x, leaf.nrm);
+    // A point of the emitter in front of x (a few draws: an emitter that straddles the
+    // plane of x shows only part of itself).
+    for attempt in 0..8u32 {
+        let (u, v) = unit2(hash3(h, attempt, 0x9E));
+        let y = point_on(&lc[..k], u, v);
+        if n.dot(y - x) <= 0.0 {
+            continue;
+        }
+        let f = if share.reciprocal {
+            let area = polygon_area(leaf.corners);
+            let l_normal = Vec3::from(lp.normal);
+            let ln = if share.side == 0 { l_normal } else { -l_normal };
+            if area > 0.0 {
+                // Over the emitter's quadrature points: the form factor to a leaf whose
+                // edge passes under a small lamp changes across the lamp.
+                let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+                let q = quadrature(&lc[..k], &mut pts, &mut wts);
+                let mut f = 0.0f32;
+                for (p, w) in pts[..q].iter().zip(&wts[..q]) {
+                    f += w * point_polygon(*p, ln, leaf.corners);
+                }
+                polygon_area(&lc[..k]) * f / area
+            } else {
+                0.0
+            }
+        } else {
+            point_polygon(x, n, &lc[..k])
+        };
+        if !(f.is_finite() && f > 0.0) {
+            return 1;
+        }
+        let t = vis.transmittance(x, y, [leaf.poly, l]);
+        if t > 0.0 {
+            let scale = t * f * total / share.weight;
+            for (ck, e) in c.iter_mut().zip(&m.emit[share.side][..nb]) {
+                *ck += scale * e;
+            }
+        }
+        return 1;
+    }
+    0
+}
+
+/// A patch's corners and their count.
+fn root_corners(st: &State, ws: &[u8], e: Elem) -> ([Vec3; 4], usize) {
+    let p = st.patch(ws, e);
+    let mut corners = [Vec3::ZERO; 4];
+    for (c, src) in corners.iter_mut().zip(p.corners) {
+        *c = src.into();
+    }
+    (corners, p.corner_count())
+}
+
+/// The leaf patch of the quadtree under `root` that holds the point `y` of its plane (front
+/// normal `n`): at each level the child that `y` lies deepest inside.
+pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> Elem {
+    let mut e = root;
+    loop {
+        let p = st.patch(ws, e);
+        if p.first_child == NONE {
+            return e;
+        }
+        let mut best = (f32::NEG_INFINITY, Elem::new(e.kind(), p.first_child));
+        for j in 0..4 {
+            let child = Elem::new(e.kind(), p.first_child + j);
+            let (corners, k) = root_corners(st, ws, child);
+            // The child's own orientation (children keep their parent's, but a flipped input
+            // corner order must not send the point to the wrong child).
+            let own = (corners[1] - corners[0]).cross(corners[k - 1] - corners[0]);
+            let n = if own.dot(n) < 0.0 { -n } else { n };
+            let mut inside = f32::INFINITY;
+            for i in 0..k {
+                let (a, b) = (corners[i], corners[(i + 1) % k]);
+                let edge = b - a;
+                let len = edge.length();
+                if len > 0.0 {
+                    inside = inside.min(edge.cross(y - a).dot(n) / len);
+                }
+            }
+            if inside > best.0 {
+                best = (inside, child);
+            }
+        }
+        e = best.1;
+    }
+}
