@@ -268,14 +268,29 @@ fn the_same_scene_in_millimetres_gives_the_same_radiosity() {
         }
     }
     // With the final gather (a Monte Carlo estimate whose samples follow the hierarchy's
-    // leaves, which rounding moves a little): the same within its noise.
+    // leaves, which rounding moves a little): the same within its noise, a few percent on
+    // the dimmest faces at the default epsilon (625 rays per side), well under 1% of the
+    // lamp's radiosity in L2.
     let settings = Settings::default();
     let (a, _) = solve_with(&scene, &settings, Run::Obvhs(2), None).unwrap();
     let (b, _) = solve_with(&mm, &settings, Run::Obvhs(2), None).unwrap();
+    let (mut sq, mut area, mut top) = (0.0f64, 0.0f64, 0.0f32);
+    for row in 0..a.len() {
+        for (x, y) in a.radiosity(row, 0).iter().zip(b.radiosity(row, 0)) {
+            sq += a.areas[row] as f64 * ((x - y) as f64).powi(2);
+            top = top.max(*x);
+        }
+        area += a.areas[row] as f64;
+    }
+    let l2 = 100.0 * (sq / area).sqrt() / top as f64;
+    assert!(
+        l2 < 0.05,
+        "final gather: m vs mm differ by {l2:.4}% (L2, of the lamp)"
+    );
     for row in 0..a.len() {
         for (x, y) in a.radiosity(row, 0).iter().zip(b.radiosity(row, 0)) {
             assert!(
-                (x - y).abs() <= 1e-2 * x.abs().max(1e-3),
+                (x - y).abs() <= 0.08 * x.abs().max(1e-3),
                 "final gather, row {row}: {x} m vs {y} mm"
             );
         }
@@ -341,6 +356,14 @@ fn settings_out_of_range_are_refused() {
         },
         Settings {
             final_rays: Settings::MAX_FINAL_RAYS + 1,
+            ..Settings::default()
+        },
+        Settings {
+            final_passes: 0,
+            ..Settings::default()
+        },
+        Settings {
+            final_passes: 5,
             ..Settings::default()
         },
         Settings {

@@ -15,7 +15,7 @@ use proptest::prelude::*;
 
 /// Every fixture with its stated expanded polygon count and instancing depth (the numbers
 /// in its header comment and in fixtures/README.md).
-const FIXTURES: [(&str, u64, u32); 8] = [
+const FIXTURES: [(&str, u64, u32); 9] = [
     ("cornell_box.hir", 17, 0),
     ("parallel_squares.hir", 2, 0),
     ("perpendicular_squares.hir", 2, 0),
@@ -24,6 +24,7 @@ const FIXTURES: [(&str, u64, u32); 8] = [
     ("chair_room.hir", 902, 1),
     ("small_plant.hir", 105, 2),
     ("leaves_cluster.hir", 156, 0),
+    ("maize_2x2.hir", 1926, 1),
 ];
 
 #[test]

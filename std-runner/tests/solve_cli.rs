@@ -186,6 +186,8 @@ fn bad_options_are_refused() {
     assert!(fails(&["solve", s(&box_), "--epsilon", "0"]).contains("--epsilon"));
     assert!(fails(&["solve", s(&box_), "--epsilon", "nan"]).contains("--epsilon"));
     assert!(fails(&["solve", s(&box_), "--threads", "0"]).contains("--threads"));
+    assert!(fails(&["solve", s(&box_), "--final-passes", "0"]).contains("--final-passes"));
+    assert!(fails(&["solve", s(&box_), "--final-passes", "5"]).contains("--final-passes"));
     for bad in ["lots", "2000000", "1.5"] {
         let out = hirad(&["solve", s(&box_), "--final-rays", bad]);
         let e = String::from_utf8(out.stderr).unwrap();
@@ -421,13 +423,15 @@ fn power_and_convergence_are_reported_and_a_capped_solve_fails() {
     );
     // A solve whose power does not balance within --max-imbalance writes its outputs and
     // fails, naming the band and how much light the transport lost; within it, it succeeds
-    // (the room loses a few percent through its cluster links at the default epsilon: a
-    // warning above 1%).
+    // (without the final gather the room loses a few percent through its cluster links at
+    // the default epsilon: a warning above 1%).
     std::fs::remove_file(&results).unwrap();
     let err = fails(&[
         "solve",
         "-q",
         s(&fixture("chair_room.hir")),
+        "--final-rays",
+        "0",
         "--max-imbalance",
         "0.5",
         "--results",
@@ -441,6 +445,8 @@ fn power_and_convergence_are_reported_and_a_capped_solve_fails() {
     let out = hirad(&[
         "solve",
         s(&fixture("chair_room.hir")),
+        "--final-rays",
+        "0",
         "--max-imbalance",
         "50",
     ]);
@@ -450,6 +456,16 @@ fn power_and_convergence_are_reported_and_a_capped_solve_fails() {
         err.contains("warning: the power balance is off by"),
         "{err}"
     );
+    // A limit below the 1% warning is enforced too (with the final gather the room is
+    // within 1%, but not within 0.01%).
+    let err = fails(&[
+        "solve",
+        "-q",
+        s(&fixture("chair_room.hir")),
+        "--max-imbalance",
+        "0.01",
+    ]);
+    assert!(err.contains("above --max-imbalance 0.01%"), "{err}");
     let err = fails(&["solve", s(&fixture("chair_room.hir")), "--max-imbalance=-1"]);
     assert!(err.contains("--max-imbalance must be"), "{err}");
     // A closed lossless room with a lamp is refused before any work, with the reason.

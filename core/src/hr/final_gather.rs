@@ -17,8 +17,11 @@
 //! the thread count.
 
 use super::direct::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
-use super::ids::Elem;
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::ids::{Elem, Kind};
+use super::layout::CHUNK;
 use super::state::State;
+use super::vis::{Ray, Vis, WsPolygons};
 use crate::formfactor::{facing_side, point_polygon};
 use crate::limits::NONE;
 use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
@@ -29,11 +32,14 @@ use glam::Vec3;
 /// emission with the rest (many emitters are large or dim, and their light is smooth).
 pub(crate) const MAX_DIRECT_EMITTERS: usize = 64;
 
-/// Rays for the whole scene when the count per side is chosen automatically.
-const AUTO_BUDGET: u64 = 1 << 20;
-/// Fewest and most rays per receiving side when chosen automatically.
+/// Rays for the whole scene when the count per side is chosen automatically, at epsilon
+/// 1e-3 (it grows as 1 / epsilon: a finer solution asks for less noise).
+const AUTO_BUDGET: f64 = 1_048_576.0;
+/// Most rays per receiving side when chosen automatically, at epsilon 1e-5 (again as
+/// 1 / epsilon, at most [`AUTO_MAX`]), and the fewest.
+const AUTO_CAP: f64 = 65_536.0;
+const AUTO_MAX: u32 = 262_144;
 const AUTO_MIN: u32 = 64;
-const AUTO_MAX: u32 = 16_384;
 
 /// The emitting polygons whose light is added directly, or none when there are more than
 /// [`MAX_DIRECT_EMITTERS`] (then `count` is 0 and `direct` false).
@@ -69,9 +75,10 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
     out
 }
 
-/// Rays per receiving side: the setting, or (for [`super::Settings::AUTO`]) about
-/// [`AUTO_BUDGET`] over all receiving sides, within [`AUTO_MIN`]..=[`AUTO_MAX`]. Rounded to
-/// a square (points and directions are both stratified on a grid).
+/// Rays per receiving side: the setting, or (for [`super::Settings::AUTO`]) a budget of
+/// [`AUTO_BUDGET`] x (1e-3 / epsilon) rays spread over all receiving sides, at least
+/// [`AUTO_MIN`] and at most [`AUTO_CAP`] x (1e-5 / epsilon) per side. Rounded to a square
+/// (points and directions are both stratified on a grid).
 pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
     let asked = st.settings.final_rays;
     if asked == 0 {
@@ -82,7 +89,10 @@ pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
         for i in 0..st.polygons {
             sides += State::sides(Elem(st.polygon(ws, i).root)) as u64;
         }
-        (AUTO_BUDGET / sides.max(1)).clamp(AUTO_MIN as u64, AUTO_MAX as u64) as u32
+        let eps = st.settings.epsilon as f64;
+        let budget = AUTO_BUDGET * (1e-3 / eps);
+        let cap = (AUTO_CAP * (1e-5 / eps)).clamp(AUTO_MIN as f64, AUTO_MAX as f64);
+        (budget / sides.max(1) as f64).clamp(AUTO_MIN as f64, cap) as u32
     } else {
         asked
     };
@@ -458,4 +468,133 @@ pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> El
         }
         e = best.1;
     }
+}
+
+struct Ctx<'a, 'v, V: ?Sized> {
+    st: &'a mut State,
+    ws: &'a mut [u8],
+    vis: &'a Vis<'v, V>,
+    em: Emitters,
+    rays: u32,
+}
+
+/// One pass of the gather over every leaf patch before the polygons' own: each leaf's
+/// irradiance from its own rays into the solution (as [`polygon`] samples it), then the
+/// radiosities follow from the materials and are averaged up the hierarchy. What a leaf
+/// shows others then carries its own visibility, not its links' average, so the final
+/// gather reads better radiosities (a Jacobi step with exact visibility; the links' error
+/// shrinks by about the reflectance). Returns the rays cast.
+pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+) -> u64 {
+    let rays = rays_per_side(st, ws);
+    if rays == 0 {
+        return 0;
+    }
+    let nb = st.bands;
+    let per = 1 + 2 * nb;
+    let em = emitters(st, ws);
+    let mut cast = 0u64;
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        let n = st.pool(kind).len as usize;
+        let mut ctx = Ctx {
+            st: &mut *st,
+            ws: &mut *ws,
+            vis,
+            em,
+            rays,
+        };
+        run_chunks(
+            ex,
+            &mut ctx,
+            n.div_ceil(CHUNK),
+            CHUNK * per,
+            |c: &Ctx<'_, '_, V>, chunk, buf| {
+                buf.fill(0.0);
+                let ray = Ray {
+                    vis: c.vis,
+                    polys: WsPolygons { st: c.st, ws: c.ws },
+                };
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let e = Elem::new(kind, i as u32);
+                    let p = c.st.patch(c.ws, e);
+                    let o = &mut buf[slot * per..(slot + 1) * per];
+                    if p.first_child != NONE {
+                        o[0] = f32::NAN;
+                        continue;
+                    }
+                    let rec = c.st.polygon(c.ws, p.poly);
+                    let total = c.st.patch(c.ws, Elem(rec.root)).area as f64;
+                    let share = if total > 0.0 {
+                        c.rays as f64 * p.area as f64 / total
+                    } else {
+                        c.rays as f64
+                    };
+                    let g = libm::ceil(libm::sqrt(share)).max(1.0) as u32;
+                    let (corners, k) = root_corners(c.st, c.ws, e);
+                    let normal = Vec3::from(rec.normal);
+                    let mut cast = 0u32;
+                    for side in 0..State::sides(e) {
+                        let nrm = if side == 0 { normal } else { -normal };
+                        let seed = hash3(e.0, side as u32, 0x4E11);
+                        let mut h = [0.0f64; 8];
+                        cast += leaf(
+                            c.st,
+                            c.ws,
+                            &ray,
+                            p.poly,
+                            &corners[..k],
+                            nrm,
+                            g,
+                            seed,
+                            &c.em,
+                            &mut h[..nb],
+                        );
+                        for (d, v) in o[1 + side * nb..1 + (side + 1) * nb].iter_mut().zip(&h) {
+                            *d = *v as f32;
+                        }
+                    }
+                    o[0] = cast as f32;
+                }
+            },
+            |c: &mut Ctx<'_, '_, V>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let o = &buf[slot * per..(slot + 1) * per];
+                    if o[0].is_nan() {
+                        continue;
+                    }
+                    cast += o[0] as u64;
+                    let e = Elem::new(kind, i as u32);
+                    let p = c.st.patch(c.ws, e);
+                    // leaf_irradiance reads (1 + closure) (h + the polygon's share of cluster
+                    // links) + direct: set h so that it reads the gathered light + direct.
+                    for side in 0..State::sides(e) {
+                        let scale = 1.0 + p.closure[side.min(1)];
+                        if scale.abs() < 1e-6 {
+                            continue;
+                        }
+                        let mut hc = [0.0f32; 8];
+                        hc[..nb].copy_from_slice(c.st.polygon_h(c.ws, p.poly, side));
+                        let g = &o[1 + side * nb..1 + (side + 1) * nb];
+                        for ((h, gv), hcv) in c.st.h_mut(c.ws, e, side).iter_mut().zip(g).zip(&hc) {
+                            *h = gv / scale - hcv;
+                        }
+                    }
+                }
+            },
+            &mut |done, total| {
+                progress.report(
+                    "final gather (patches)",
+                    (done * CHUNK).min(n) as u64,
+                    (total * CHUNK).min(n) as u64,
+                )
+            },
+        );
+    }
+    super::solve::pull(st, ws);
+    cast
 }

@@ -69,9 +69,13 @@ pub struct Settings {
     /// Most children a cluster keeps before grouping levels are inserted (2..=16).
     pub max_children: u32,
     /// Final gather rays per receiving side of every input polygon (see `final_gather`):
-    /// 0 leaves each polygon the hierarchy's irradiance, [`Settings::AUTO`] spreads about a
-    /// million rays over the scene (64 to 16,384 per side). Rounded to a square.
+    /// 0 leaves each polygon the hierarchy's irradiance, [`Settings::AUTO`] spreads
+    /// 1e3 / epsilon rays over the scene (a million at the default epsilon), at least 64 and
+    /// at most 0.65 / epsilon per side. Rounded to a square.
     pub final_rays: u32,
+    /// Final gather passes (1..=4): with more than one, every leaf patch first gathers its
+    /// own light that many times less one, and the polygons' gather reads those radiosities.
+    pub final_passes: u32,
 }
 
 impl Settings {
@@ -100,6 +104,9 @@ impl Settings {
         if !(2..=16).contains(&self.max_children) {
             return Err(HrError::Settings("max_children must lie in 2..=16"));
         }
+        if !(1..=4).contains(&self.final_passes) {
+            return Err(HrError::Settings("final_passes must lie in 1..=4"));
+        }
         if self.final_rays > Self::MAX_FINAL_RAYS && self.final_rays != Self::AUTO {
             return Err(HrError::Settings(
                 "final_rays must lie in 0..=1048576 (or be Settings::AUTO)",
@@ -121,6 +128,7 @@ impl Default for Settings {
             max_rounds: 24,
             max_children: 8,
             final_rays: Settings::AUTO,
+            final_passes: 2,
         }
     }
 }
@@ -531,6 +539,11 @@ where
     st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     st.stats.emitted_power = st.power;
+    if settings.final_passes > 1 {
+        for _ in 1..settings.final_passes {
+            st.stats.rays += final_gather::relight(&mut st, ws, &vis, &mut seq, progress);
+        }
+    }
     st.stats.balance = balance::measure(&st, ws, &vis, &mut seq, 4 * settings.rays, progress);
     progress.report("writing (polygons)", 0, st.polygons as u64);
     let written =

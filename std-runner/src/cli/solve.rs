@@ -74,6 +74,10 @@ pub struct Args {
     /// per side), `0` keeps the hierarchy's irradiance (faster, right on average only).
     #[arg(long, default_value = "auto", value_parser = parse_final_rays)]
     pub final_rays: u32,
+    /// Final gather passes (1..=4): with 2 or more every patch gathers its own light first
+    /// (each pass costs about as much as the polygons' gather).
+    #[arg(long, default_value_t = Settings::default().final_passes)]
+    pub final_passes: u32,
     /// Smallest patch (hr), as a fraction of the scene's total polygon area.
     #[arg(long, default_value_t = Settings::default().min_area)]
     pub min_area: f32,
@@ -142,6 +146,9 @@ pub fn run(a: Args) -> Result<()> {
     }
     if a.max_iterations == 0 {
         bail!("--max-iterations must be at least 1");
+    }
+    if !(1..=4).contains(&a.final_passes) {
+        bail!("--final-passes must lie in 1..=4, got {}", a.final_passes);
     }
     if a.rays == 0 || a.rays > 1024 {
         bail!("--rays must lie in 1..=1024, got {}", a.rays);
@@ -234,6 +241,7 @@ pub fn run(a: Args) -> Result<()> {
                 epsilon: a.epsilon,
                 rays: a.rays,
                 final_rays: a.final_rays,
+                final_passes: a.final_passes,
                 min_area: a.min_area,
                 tolerance: a.tolerance,
                 max_iterations: a.max_iterations,
@@ -350,7 +358,7 @@ pub fn run(a: Args) -> Result<()> {
             .abs()
             .total_cmp(&y.imbalance_percent.abs())
     });
-    if let Some(w) = worst.filter(|w| w.imbalance_percent.abs() > 1.0) {
+    if let Some(w) = worst.filter(|w| w.imbalance_percent.abs() > a.max_imbalance.min(1.0)) {
         let what = if w.imbalance_percent > 0.0 {
             "lost"
         } else {
