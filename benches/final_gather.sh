@@ -24,7 +24,7 @@ run() { # name, then solve arguments; prints seconds and peak RSS
 for e in 1e-3 1e-4 1e-5; do
   for g in "--final-rays 0" ""; do
     t=$(run "$CB" --epsilon $e $g --results "$W/cb.csv")
-    r=$(python3 benches/compare.py "$W/cornell_exact.csv" "$W/cb.csv" --skip 10,11 | head -2 | tr '\n' ' ')
+    r=$(python3 benches/compare.py "$W/cornell_exact.csv" "$W/cb.csv" --skip 10,11 2>/dev/null | head -2 | tr '\n' ' ')
     echo "cornell_triangles eps $e [${g:-defaults}] $t | $r"
   done
 done
