@@ -41,6 +41,10 @@ const BOX_PAD: f32 = 1e-5;
 /// lies below [`T_MARGIN`]. A power of two keeps the scaling exact.
 const RAY_STRETCH: f32 = 16.0;
 
+/// Groups of coincident polygons larger than this are first tested as a whole (see
+/// `ObvhsVisibility::group_boxes`).
+const GROUP_TEST: u32 = 4;
+
 /// Why a polygon list cannot be used for visibility.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum VisibilityError {
@@ -100,6 +104,10 @@ pub struct ObvhsVisibility {
     /// (which then silently drops nodes).
     groups: Vec<u32>,
     members: Vec<u32>,
+    /// Per group of more than [`GROUP_TEST`] members, the exact world box of its members (m):
+    /// a segment whose part inside it lies within [`T_MARGIN`] of an end crosses none of
+    /// them, so thousands of coincident polygons cost one test, not thousands.
+    group_boxes: Vec<(DVec3, DVec3)>,
     /// Centre of the normalised frame (m).
     centre: Vec3,
     /// World-to-normalised scale (1/m), a power of two.
@@ -153,6 +161,7 @@ impl ObvhsVisibility {
                 boxes: Vec::new(),
                 groups: vec![0],
                 members: Vec::new(),
+                group_boxes: Vec::new(),
                 centre: Vec3::ZERO,
                 inv_scale: 1.0,
             });
@@ -196,6 +205,23 @@ impl ObvhsVisibility {
             members.push(i);
         }
         groups.push(members.len() as u32);
+        let group_boxes = groups
+            .windows(2)
+            .map(|w| {
+                let (mut lo, mut hi) =
+                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                for &m in &members[w[0] as usize..w[1] as usize] {
+                    for v in &corners[m as usize][..counts[m as usize] as usize] {
+                        lo = lo.min(v.as_dvec3());
+                        hi = hi.max(v.as_dvec3());
+                    }
+                }
+                // Widened a little against rounding (relative to the box and its place).
+                let pad =
+                    (hi - lo).max_element() * 1e-6 + lo.abs().max(hi.abs()).max_element() * 1e-12;
+                (lo - DVec3::splat(pad), hi + DVec3::splat(pad))
+            })
+            .collect();
         let bvh = build_cwbvh(
             &unique,
             BvhBuildParams::medium_build(),
@@ -215,9 +241,36 @@ impl ObvhsVisibility {
             boxes,
             groups,
             members,
+            group_boxes,
             centre,
             inv_scale,
         })
+    }
+
+    /// Whether the segment `o + t d` can cross a member of group `g` at
+    /// `T_MARGIN < t < 1 - T_MARGIN` (always true for small groups, which are tested
+    /// member by member anyway).
+    #[inline]
+    fn group_reachable(&self, g: u32, o: DVec3, d: DVec3) -> bool {
+        let g = g as usize;
+        if self.groups[g + 1] - self.groups[g] <= GROUP_TEST {
+            return true;
+        }
+        let (lo, hi) = self.group_boxes[g];
+        let m = 0.5 * T_MARGIN as f64;
+        let (mut t0, mut t1) = (m, 1.0 - m);
+        for k in 0..3 {
+            if d[k] == 0.0 {
+                if o[k] < lo[k] || o[k] > hi[k] {
+                    return false;
+                }
+            } else {
+                let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+                t0 = t0.max(a.min(b));
+                t1 = t1.min(a.max(b));
+            }
+        }
+        t0 <= t1
     }
 
     /// Number of polygons.
@@ -419,10 +472,12 @@ impl Visibility for ObvhsVisibility {
         );
         let (o, dd) = (from.as_dvec3(), d.as_dvec3());
         let clear = bvh.ray_traverse_miss(ray, |_, k| {
-            let blocked = self
-                .group(bvh.primitive_indices[k])
-                .iter()
-                .any(|&id| id != skip[0] && id != skip[1] && self.blocks(id as usize, o, dd));
+            let g = bvh.primitive_indices[k];
+            let blocked = self.group_reachable(g, o, dd)
+                && self
+                    .group(g)
+                    .iter()
+                    .any(|&id| id != skip[0] && id != skip[1] && self.blocks(id as usize, o, dd));
             if blocked { 0.0 } else { f32::INFINITY }
         });
         if clear { 1.0 } else { 0.0 }
@@ -452,7 +507,11 @@ impl Visibility for ObvhsVisibility {
         let mut hit = obvhs::ray::RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |_, k| {
             let mut nearest = f32::INFINITY;
-            for &id in self.group(bvh.primitive_indices[k]) {
+            let g = bvh.primitive_indices[k];
+            if !self.group_reachable(g, o, dd) {
+                return nearest;
+            }
+            for &id in self.group(g) {
                 if id == skip[0] || id == skip[1] {
                     continue;
                 }

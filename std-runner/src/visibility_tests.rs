@@ -305,3 +305,39 @@ fn thousands_of_coincident_polygons_are_all_found() {
     );
     assert_eq!(candidates.len(), 3000);
 }
+
+#[test]
+fn a_stack_of_coincident_polygons_blocks_through_it_and_not_from_it() {
+    // 1,000 identical triangles (one group of the BVH) and a quad above them: a segment
+    // through the stack is blocked by its lowest id; one that starts on the stack is not
+    // blocked by the stack (its crossings lie within the end margin), only by the quad.
+    let tri = vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1e-6, 0.0, 0.0),
+        Vec3::new(0.0, 1e-6, 0.0),
+    ];
+    let mut polys: Vec<Vec<Vec3>> = (0..1000).map(|_| tri.clone()).collect();
+    polys.push(vec![
+        Vec3::new(-1.0, -1.0, 1.0),
+        Vec3::new(1.0, -1.0, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(-1.0, 1.0, 1.0),
+    ]);
+    let v = ObvhsVisibility::new(&polys).unwrap();
+    let x = Vec3::new(2e-7, 2e-7, 0.0);
+    let below = Vec3::new(2e-7, 2e-7, -0.5);
+    assert_eq!(v.transmittance(below, x + Vec3::Z * 0.5, [NONE, NONE]), 0.0);
+    assert_eq!(
+        v.first_hit(below, x + Vec3::Z * 0.5, [NONE, NONE])
+            .map(|h| h.0),
+        Some(0)
+    );
+    assert_eq!(v.transmittance(x, x + Vec3::Z * 0.5, [3, NONE]), 1.0);
+    assert_eq!(
+        v.first_hit(x, x + Vec3::Z * 2.0, [3, NONE]).map(|h| h.0),
+        Some(1000)
+    );
+    // The brute-force answers agree.
+    assert_eq!(v.brute_force(x, x + Vec3::Z * 0.5, [3, NONE]), 1.0);
+    assert_eq!(v.brute_force(below, x + Vec3::Z * 0.5, [NONE, NONE]), 0.0);
+}

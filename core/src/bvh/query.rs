@@ -31,6 +31,8 @@ pub(crate) struct SlabSegment {
     /// (`min` at 0..3, `max` at 4..7): chosen once from the direction's sign.
     near: [usize; 3],
     far: [usize; 3],
+    /// Boxes the segment leaves before this parameter are not met (0 for the whole segment).
+    t_min: f32,
 }
 
 impl SlabSegment {
@@ -55,6 +57,7 @@ impl SlabSegment {
             inv: [1.0 / d[0], 1.0 / d[1], 1.0 / d[2]],
             near,
             far,
+            t_min: 0.0,
         })
     }
 
@@ -63,7 +66,7 @@ impl SlabSegment {
     #[inline(always)]
     pub(crate) fn enter(&self, node: &BvhNode, t_max: f32) -> Option<f32> {
         let w: &[f32; 8] = bytemuck::cast_ref(node);
-        let mut near = 0.0f32;
+        let mut near = self.t_min;
         let mut far = t_max;
         for axis in 0..3 {
             let t0 = (w[self.near[axis]] - self.origin[axis]) * self.inv[axis];
@@ -89,14 +92,31 @@ impl Bvh<'_> {
     /// Every primitive the exact segment touches is offered to `hit` (the box test is
     /// conservative); others may be offered too, and `hit` decides. A non-finite end point
     /// meets nothing. A zero-length segment is a point: leaves whose box holds it are visited.
-    pub fn any_hit(&self, from: Vec3, to: Vec3, mut hit: impl FnMut(u32) -> bool) -> bool {
+    pub fn any_hit(&self, from: Vec3, to: Vec3, hit: impl FnMut(u32) -> bool) -> bool {
+        self.any_hit_within(from, to, 0.0, 1.0, hit)
+    }
+
+    /// [`Bvh::any_hit`] for the part `t_min..=t_max` of the segment: leaves whose box it
+    /// meets only outside that range are not visited (a segment that starts inside a stack
+    /// of thousands of coincident polygons does not visit them when their crossings fall
+    /// within the caller's end margin).
+    pub fn any_hit_within(
+        &self,
+        from: Vec3,
+        to: Vec3,
+        t_min: f32,
+        t_max: f32,
+        mut hit: impl FnMut(u32) -> bool,
+    ) -> bool {
         let Some(root) = self.nodes.first() else {
             return false;
         };
-        let Some(seg) = SlabSegment::new(from, to) else {
+        let Some(mut seg) = SlabSegment::new(from, to) else {
             return false;
         };
-        if seg.enter(root, 1.0).is_none() {
+        seg.t_min = t_min.max(0.0);
+        let t_max = t_max.min(1.0);
+        if seg.enter(root, t_max).is_none() {
             return false;
         }
         let mut stack = [0u32; MAX_DEPTH];
@@ -113,7 +133,7 @@ impl Bvh<'_> {
             } else {
                 let l = node.first as usize;
                 let (left, right) = (&self.nodes[l], &self.nodes[l + 1]);
-                match (seg.enter(left, 1.0), seg.enter(right, 1.0)) {
+                match (seg.enter(left, t_max), seg.enter(right, t_max)) {
                     (Some(tl), Some(tr)) => {
                         // Depth bound of the tree: the stack holds one entry per level above.
                         if tl <= tr {
@@ -155,13 +175,27 @@ impl Bvh<'_> {
         &self,
         from: Vec3,
         to: Vec3,
+        hit: impl FnMut(u32, f32) -> Option<f32>,
+    ) -> Option<(u32, f32)> {
+        self.closest_hit_within(from, to, 0.0, 1.0, hit)
+    }
+
+    /// [`Bvh::closest_hit`] for the part `t_min..=t_max` of the segment (see
+    /// [`Bvh::any_hit_within`]).
+    pub fn closest_hit_within(
+        &self,
+        from: Vec3,
+        to: Vec3,
+        t_min: f32,
+        t_max: f32,
         mut hit: impl FnMut(u32, f32) -> Option<f32>,
     ) -> Option<(u32, f32)> {
         let root = self.nodes.first()?;
-        let seg = SlabSegment::new(from, to)?;
-        seg.enter(root, 1.0)?;
+        let mut seg = SlabSegment::new(from, to)?;
+        seg.t_min = t_min.max(0.0);
+        let mut t_max = t_max.min(1.0);
+        seg.enter(root, t_max)?;
         let mut best: Option<(u32, f32)> = None;
-        let mut t_max = 1.0f32;
         let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
         let mut sp = 0usize;
         let mut node = root;
