@@ -156,6 +156,27 @@ fn reference_error_and_stats() {
     assert_eq!(json["polygons"], 2);
     assert_eq!(json["epsilon"], 0.001);
     assert!((json["error_percent"].as_f64().unwrap() - pct).abs() < 1e-3);
+    // The price per phase: named, in the order they first ran, adding up to the run's time
+    // (the rest is reading the scene and writing the report), and the rays cast.
+    let phases = json["phases"].as_array().expect("phases");
+    let names: Vec<&str> = phases
+        .iter()
+        .map(|p| p["phase"].as_str().unwrap())
+        .collect();
+    for want in [
+        "setup",
+        "lighting patches",
+        "evaluating links",
+        "solving",
+        "final gather",
+    ] {
+        assert!(names.contains(&want), "no phase {want}: {names:?}");
+    }
+    assert_eq!(names[0], "setup");
+    let sum: f64 = phases.iter().map(|p| p["seconds"].as_f64().unwrap()).sum();
+    let total = json["seconds"].as_f64().unwrap();
+    assert!(sum > 0.0 && sum <= total, "phases {sum} s of {total} s");
+    assert!(json["rays"].as_u64().unwrap() > 0, "{json}");
 }
 
 #[test]

@@ -545,7 +545,7 @@ where
         }
     }
     st.stats.balance = balance::measure(&st, ws, &vis, &mut seq, 4 * settings.rays, progress);
-    progress.report("writing (polygons)", 0, st.polygons as u64);
+    progress.report(output::phase(&st, ws), 0, st.polygons as u64);
     let written =
         output::emit(&st, ws, &vis, &mut seq, progress, sink).map_err(SolveError::Sink)?;
     st.stats.rays += written.rays;

@@ -22,6 +22,20 @@ pub(crate) struct Written {
     pub rays: u64,
 }
 
+/// The output phase's name for progress reports: the polygons' final gather and their
+/// hand-over to the sink run chunk by chunk together.
+const GATHER_PHASE: &str = "final gather and output (polygons)";
+const WRITE_PHASE: &str = "writing (polygons)";
+
+/// The name under which the output pass reports its progress.
+pub(crate) fn phase(st: &State, ws: &[u8]) -> &'static str {
+    if rays_per_side(st, ws) > 0 {
+        GATHER_PHASE
+    } else {
+        WRITE_PHASE
+    }
+}
+
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a State,
     ws: &'a [u8],
@@ -89,11 +103,7 @@ pub(crate) fn emit<K: Sink, V: Visibility + ?Sized, E: Executor>(
         },
         &mut |done, total| {
             progress.report(
-                if rays > 0 {
-                    "final gather (polygons)"
-                } else {
-                    "writing (polygons)"
-                },
+                if rays > 0 { GATHER_PHASE } else { WRITE_PHASE },
                 (done * CHUNK).min(n) as u64,
                 (total * CHUNK).min(n) as u64,
             )

@@ -259,6 +259,15 @@ pub fn run(a: Args) -> Result<()> {
             .with_context(|| format!("{}", a.scene.display()))?;
             let s = run.stats;
             report.threads = run.threads as u32;
+            report.rays = s.rays;
+            report.phases = run
+                .phases
+                .iter()
+                .map(|(phase, seconds)| crate::output::PhaseTime {
+                    phase: phase.clone(),
+                    seconds: *seconds,
+                })
+                .collect();
             report.elements = s.clusters + s.patches;
             report.links = s.links;
             report.iterations = s.iterations;

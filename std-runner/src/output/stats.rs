@@ -28,6 +28,16 @@ pub struct BandPower {
     pub imbalance_percent: f64,
 }
 
+/// Wall-clock time of one phase of a solve.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PhaseTime {
+    /// The phase ("setup", "lighting patches", "evaluating links", "refining", "closing",
+    /// "solving", "power balance", "final gather", ...).
+    pub phase: String,
+    /// Seconds spent in it, summed over every time it ran.
+    pub seconds: f64,
+}
+
 fn yes() -> bool {
     true
 }
@@ -89,6 +99,13 @@ pub struct SolveReport {
     /// Where the power went, per band (hr; empty for the exact solver).
     #[serde(default)]
     pub power: Vec<BandPower>,
+    /// Seconds per phase, in the order the phases first ran (hr; empty for the exact
+    /// solver). Phases that run every round (refining, evaluating links) add up.
+    #[serde(default)]
+    pub phases: Vec<PhaseTime>,
+    /// Rays cast (hr: link visibility, direct light, exposure, power balance, final gather).
+    #[serde(default)]
+    pub rays: u64,
 }
 
 impl SolveReport {
@@ -139,6 +156,14 @@ impl SolveReport {
             self.seconds,
             bytes(self.peak_workspace_bytes)
         )?;
+        if !self.phases.is_empty() {
+            let parts: Vec<String> = self
+                .phases
+                .iter()
+                .map(|p| format!("{} {:.3} s", p.phase, p.seconds))
+                .collect();
+            writeln!(out, "  phases: {}; {} rays", parts.join(", "), self.rays)?;
+        }
         writeln!(
             out,
             "  {} polygons, {} elements, {} links, {} iterations, {} refinement passes",

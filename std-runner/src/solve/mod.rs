@@ -4,6 +4,7 @@
 mod executor;
 
 pub use executor::RayonExecutor;
+use std::time::Instant;
 
 use crate::output::Progress;
 use crate::scene::{self, ExpandVisitor, ExpandedNode, Scene};
@@ -23,10 +24,15 @@ pub enum VisibilityChoice {
 }
 
 /// What a hierarchical run produced.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct HrRun {
     /// The solver's statistics.
     pub stats: Stats,
+    /// Wall-clock seconds per phase, in the order the phases first ran (a phase that runs
+    /// again, as refining and evaluating links do every round, adds to its first entry):
+    /// "setup" (compiling the scene, building the ray caster and the workspace), then the
+    /// solver's phases as its progress names them, without their units.
+    pub phases: Vec<(String, f64)>,
     /// The plan the workspace was sized from.
     pub plan: Plan,
     /// Threads used.
@@ -55,10 +61,41 @@ pub fn world_polygons(scene: &Scene) -> Vec<Vec<Vec3>> {
     c.0
 }
 
-/// Reports the core's progress on the runner's progress line.
+/// Reports the core's progress on the runner's progress line, and times its phases.
 struct ProgressAdapter<'a> {
     bar: &'a Progress,
     phase: String,
+    /// Seconds per phase name (without the units in parentheses), in order of appearance.
+    times: Vec<(String, f64)>,
+    /// The phase being timed (index into `times`) and since when.
+    current: Option<(usize, Instant)>,
+}
+
+impl ProgressAdapter<'_> {
+    /// Starts timing `name` (closing the phase before it).
+    fn start(&mut self, name: &str, now: Instant) {
+        self.stop(now);
+        let i = match self.times.iter().position(|(n, _)| n == name) {
+            Some(i) => i,
+            None => {
+                self.times.push((name.to_string(), 0.0));
+                self.times.len() - 1
+            }
+        };
+        self.current = Some((i, now));
+    }
+
+    /// Adds the running phase's time.
+    fn stop(&mut self, now: Instant) {
+        if let Some((i, since)) = self.current.take() {
+            self.times[i].1 += now.duration_since(since).as_secs_f64();
+        }
+    }
+}
+
+/// A phase's name without its units: "refining (links)" -> "refining".
+fn phase_name(what: &str) -> &str {
+    what.split(" (").next().unwrap_or(what).trim()
 }
 
 impl hr::Progress for ProgressAdapter<'_> {
@@ -66,6 +103,10 @@ impl hr::Progress for ProgressAdapter<'_> {
         if what != self.phase {
             self.phase = what.to_string();
             self.bar.phase(what, (total > 0).then_some(total));
+            let name = phase_name(what).to_string();
+            if self.current.is_none_or(|(i, _)| self.times[i].0 != name) {
+                self.start(&name, Instant::now());
+            }
         }
         self.bar.set(done);
     }
@@ -83,6 +124,7 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     progress: &Progress,
     sink: &mut K,
 ) -> Result<HrRun> {
+    let setup = Instant::now();
     let bytes = scene::compile(scene).map_err(|e| anyhow!("{e}"))?;
     let view = scene::read_image(&bytes).map_err(|e| anyhow!("{e}"))?;
     let internal = visibility == VisibilityChoice::Core;
@@ -110,7 +152,11 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     let mut adapter = ProgressAdapter {
         bar: progress,
         phase: String::new(),
+        times: Vec::new(),
+        current: None,
     };
+    adapter.times.push(("setup".to_string(), 0.0));
+    adapter.current = Some((0, setup));
     let result = match visibility {
         VisibilityChoice::Obvhs => {
             let polygons = world_polygons(scene);
@@ -136,6 +182,8 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
             sink,
         ),
     };
+    adapter.stop(Instant::now());
+    let phases = adapter.times;
     progress.finish();
     let stats = result.map_err(|e| match e {
         SolveError::Hr(HrError::WorkspaceTooSmall { needed }) => {
@@ -146,6 +194,7 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     })?;
     Ok(HrRun {
         stats,
+        phases,
         plan,
         threads: exec.threads(),
     })
