@@ -1,7 +1,7 @@
 //! The stats report: JSON round trip with every field, and the summary text.
 
 use super::reference::{Comparison, WorstPolygon};
-use super::stats::{BandPower, SolveReport, bytes};
+use super::stats::{BandPower, PhaseTime, SolveReport, bytes};
 
 fn report() -> SolveReport {
     SolveReport {
@@ -34,6 +34,17 @@ fn report() -> SolveReport {
             imbalance: 0.25,
             imbalance_percent: 8.333,
         }],
+        phases: vec![
+            PhaseTime {
+                phase: "setup".into(),
+                seconds: 0.25,
+            },
+            PhaseTime {
+                phase: "solving".into(),
+                seconds: 1.125,
+            },
+        ],
+        rays: 123_456,
     }
 }
 
@@ -45,6 +56,10 @@ fn summary_tells_power_and_convergence() {
     assert!(text.contains("nir: in 3.000000 (emitted 1.000000, direct 2.000000), absorbed 1.500000 + 0.250000 by backs, escaped 1.000000, imbalance +8.333 %"), "{text}");
     assert!(text.contains("NOT converged"), "{text}");
     assert!(text.contains("3.0e-4"), "{text}");
+    assert!(
+        text.contains("phases: setup 0.250 s, solving 1.125 s; 123456 rays"),
+        "{text}"
+    );
     // Old JSON without the new fields reads as converged, with no balance.
     let old = SolveReport::from_json(r#"{"method":"hr","epsilon":0.001,"threads":1,"polygons":1,"elements":1,"links":1,"iterations":1,"refinement_passes":1,"seconds":0.1,"peak_workspace_bytes":1,"workspace_bytes":1,"budget_limited":false,"error_percent":null}"#).unwrap();
     assert!(old.converged && old.power.is_empty() && old.remaining_change.is_none());
@@ -74,6 +89,8 @@ fn json_round_trip_holds_every_field() {
         "converged",
         "remaining_change",
         "power",
+        "phases",
+        "rays",
     ] {
         assert!(
             text.contains(&format!("\"{field}\":")),
