@@ -470,6 +470,11 @@ pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> El
     }
 }
 
+/// The relighting passes cast this many times fewer rays per side than the polygons'
+/// gather, and at least [`RELIGHT_MIN`].
+const RELIGHT_SHARE: u32 = 4;
+const RELIGHT_MIN: u32 = 16;
+
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a mut State,
     ws: &'a mut [u8],
@@ -491,10 +496,13 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
     ex: &mut Fallback<'_, E>,
     progress: &mut dyn Progress,
 ) -> u64 {
-    let rays = rays_per_side(st, ws);
-    if rays == 0 {
+    let full = rays_per_side(st, ws);
+    if full == 0 {
         return 0;
     }
+    // What a leaf shows others is read by many rays from many places, so its own noise
+    // averages out there: a quarter of the polygons' rays does (at least 16 per side).
+    let rays = (full / RELIGHT_SHARE).max(RELIGHT_MIN);
     let nb = st.bands;
     let per = 1 + 2 * nb;
     let em = emitters(st, ws);
