@@ -471,8 +471,8 @@ pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> El
 }
 
 /// The relighting passes cast this many times fewer rays per side than the polygons'
-/// gather, and at least [`RELIGHT_MIN`].
-const RELIGHT_SHARE: u32 = 4;
+/// gather (1: as many), and at least [`RELIGHT_MIN`].
+const RELIGHT_SHARE: u32 = 1;
 const RELIGHT_MIN: u32 = 16;
 
 struct Ctx<'a, 'v, V: ?Sized> {
@@ -500,8 +500,9 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
     if full == 0 {
         return 0;
     }
-    // What a leaf shows others is read by many rays from many places, so its own noise
-    // averages out there: a quarter of the polygons' rays does (at least 16 per side).
+    // The same rays as the polygons' gather: a quarter of them (the noise of what a leaf
+    // shows others should average out where they read it) made a random scene (a 2.5 cm
+    // lamp 200 m over a 790 m floor) create 3.6% of its light; with all of them 1.9%.
     let rays = (full / RELIGHT_SHARE).max(RELIGHT_MIN);
     let nb = st.bands;
     let per = 1 + 2 * nb;

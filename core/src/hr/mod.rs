@@ -74,8 +74,8 @@ pub struct Settings {
     /// at most 0.65 / epsilon per side. Rounded to a square.
     pub final_rays: u32,
     /// Final gather passes (1..=4): with more than one, every leaf patch first gathers its
-    /// own light (with a quarter of the rays) that many times less one, and the polygons'
-    /// gather reads those radiosities.
+    /// own light that many times less one (with as many rays as the polygons' gather), and
+    /// the polygons' gather reads those radiosities.
     pub final_passes: u32,
 }
 

@@ -60,7 +60,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         gather(st, ws, ex, false, it == 0);
         push(st, ws);
         let jumped = extrapolate > 0.0;
-        let (change, b_max) = pull_extrapolated(st, ws, extrapolate);
+        let (change, b_max) = pull_parallel(st, ws, ex, extrapolate);
         extrapolate = 0.0;
         iterations = it + 1;
         st.stats.iterations += 1;
@@ -277,6 +277,97 @@ pub(crate) fn pull(st: &State, ws: &mut [u8]) -> (f32, f32) {
 /// [`pull`], with every leaf's change from its previous radiosity scaled by
 /// `1 + extrapolate` (see [`iterate`]); the returned change is before scaling.
 fn pull_extrapolated(st: &State, ws: &mut [u8], extrapolate: f32) -> (f32, f32) {
+    pull_from(st, ws, extrapolate, false)
+}
+
+/// A leaf's new radiosity per side and band, `B = E + rho H + tau H_other` (H with the
+/// direct light of suns and sky).
+fn leaf_radiosity(st: &State, ws: &[u8], e: Elem, new: &mut [[f32; 8]; 2]) {
+    let nb = st.bands;
+    let sides = State::sides(e);
+    let p = st.patch(ws, e);
+    let m = st.material(ws, st.polygon(ws, p.poly).material);
+    let mut h = [[0.0f32; 8]; 2];
+    for (side, hs) in h.iter_mut().enumerate().take(sides) {
+        super::closure::leaf_irradiance(st, ws, e, side, &mut hs[..nb]);
+    }
+    for side in 0..sides {
+        for b in 0..nb {
+            let other = if sides == 2 { h[1 - side][b] } else { 0.0 };
+            new[side][b] = m.emit[side][b] + m.rho[side][b] * h[side][b] + m.tau[b] * other;
+        }
+    }
+}
+
+/// [`pull_extrapolated`] with the leaves' radiosities, the bulk of the work, computed in
+/// chunks on the executor (the same arithmetic, applied in order: the same bits for any
+/// thread count); then parents and clusters as before.
+fn pull_parallel<E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    ex: &mut Fallback<'_, E>,
+    extrapolate: f32,
+) -> (f32, f32) {
+    let nb = st.bands;
+    let per = 2 * nb;
+    let mut change = 0.0f32;
+    for kind in [Kind::Patch2, Kind::Patch1] {
+        let n = st.pool(kind).len as usize;
+        let mut ctx = Ctx {
+            st: &mut *st,
+            ws: &mut *ws,
+        };
+        run_chunks(
+            ex,
+            &mut ctx,
+            n.div_ceil(CHUNK),
+            CHUNK * per,
+            |c: &Ctx<'_>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let e = Elem::new(kind, i as u32);
+                    let o = &mut buf[slot * per..(slot + 1) * per];
+                    if c.st.patch(c.ws, e).first_child != NONE {
+                        o[0] = f32::NAN;
+                        continue;
+                    }
+                    let mut new = [[0.0f32; 8]; 2];
+                    leaf_radiosity(c.st, c.ws, e, &mut new);
+                    for side in 0..State::sides(e) {
+                        o[side * nb..(side + 1) * nb].copy_from_slice(&new[side][..nb]);
+                    }
+                }
+            },
+            |c: &mut Ctx<'_>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                    let o = &buf[slot * per..(slot + 1) * per];
+                    if o[0].is_nan() {
+                        continue;
+                    }
+                    let e = Elem::new(kind, i as u32);
+                    for side in 0..State::sides(e) {
+                        let b = c.st.b_mut(c.ws, e, side);
+                        for (old, &n) in b.iter_mut().zip(&o[side * nb..(side + 1) * nb]) {
+                            change = change.max((n - *old).abs());
+                            let n = if extrapolate > 0.0 {
+                                (n + (n - *old) * extrapolate).max(0.0)
+                            } else {
+                                n
+                            };
+                            *old = n;
+                        }
+                    }
+                }
+            },
+            &mut |_, _| {},
+        );
+    }
+    let (_, b_max) = pull_from(st, ws, 0.0, true);
+    (change, b_max)
+}
+
+/// The pull itself; with `leaves_done` the leaves' radiosities are already new (see
+/// [`pull_parallel`]) and are only passed up.
+fn pull_from(st: &State, ws: &mut [u8], extrapolate: f32, leaves_done: bool) -> (f32, f32) {
     let nb = st.bands;
     let (mut change, mut b_max) = (0.0f32, 0.0f32);
     for kind in [Kind::Patch2, Kind::Patch1] {
@@ -286,19 +377,14 @@ fn pull_extrapolated(st: &State, ws: &mut [u8], extrapolate: f32) -> (f32, f32) 
             let mut p = st.patch(ws, e);
             let sides = State::sides(e);
             let mut new = [[0.0f32; 8]; 2];
-            if p.first_child == NONE {
-                let m = st.material(ws, st.polygon(ws, p.poly).material);
-                let mut h = [[0.0f32; 8]; 2];
-                for (side, hs) in h.iter_mut().enumerate().take(sides) {
-                    super::closure::leaf_irradiance(st, ws, e, side, &mut hs[..nb]);
-                }
-                for side in 0..sides {
-                    for b in 0..nb {
-                        let other = if sides == 2 { h[1 - side][b] } else { 0.0 };
-                        new[side][b] =
-                            m.emit[side][b] + m.rho[side][b] * h[side][b] + m.tau[b] * other;
+            if p.first_child == NONE && leaves_done {
+                for (side, ns) in new.iter_mut().enumerate().take(sides) {
+                    if let Some(b) = st.b(ws, e, side) {
+                        ns[..nb].copy_from_slice(b);
                     }
                 }
+            } else if p.first_child == NONE {
+                leaf_radiosity(st, ws, e, &mut new);
             } else {
                 let (mut area, mut seen) = (0.0f32, 0.0f32);
                 let mut plain = [[0.0f32; 8]; 2];

@@ -75,7 +75,7 @@ pub struct Args {
     #[arg(long, default_value = "auto", value_parser = parse_final_rays)]
     pub final_rays: u32,
     /// Final gather passes (1..=4): with 2 or more every patch gathers its own light first
-    /// (each such pass costs about a quarter of the polygons' gather).
+    /// (each such pass costs about as much as the polygons' gather).
     #[arg(long, default_value_t = Settings::default().final_passes)]
     pub final_passes: u32,
     /// Smallest patch (hr), as a fraction of the scene's total polygon area.
