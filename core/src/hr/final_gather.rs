@@ -127,15 +127,10 @@ pub(crate) fn polygon<V: Visibility + ?Sized>(
     let mut area = 0.0f64;
     let mut leaf_no = 0u32;
     for (e, p) in st.leaves(ws, root) {
-        let (corners, k) = root_corners(st, ws, e);
+        let (corners, k) = patch_corners(st, ws, e);
         let a = p.area as f64;
         area += a;
-        let share = if total_area > 0.0 {
-            rays as f64 * a / total_area
-        } else {
-            rays as f64
-        };
-        let g = libm::ceil(libm::sqrt(share)).max(1.0) as u32;
+        let g = leaf_grid(rays, p.area, total_area as f32);
         leaf_no += 1;
         for (side, sum) in sums.iter_mut().enumerate().take(State::sides(root)) {
             let nrm = if side == 0 { normal } else { -normal };
@@ -166,6 +161,17 @@ pub(crate) fn polygon<V: Visibility + ?Sized>(
         }
     }
     cast
+}
+
+/// Samples along each side of the grid of a leaf patch of area `leaf` (m^2) in a polygon
+/// of area `polygon`: its share by area of `rays`, at least one.
+fn leaf_grid(rays: u32, leaf: f32, polygon: f32) -> u32 {
+    let share = if polygon > 0.0 {
+        rays as f64 * leaf as f64 / polygon as f64
+    } else {
+        rays as f64
+    };
+    libm::ceil(libm::sqrt(share)).max(1.0) as u32
 }
 
 /// The mean irradiance over one leaf patch (`corners`) on the side facing `nrm`, from
@@ -233,12 +239,7 @@ fn leaf<V: Visibility + ?Sized>(
         if total > 0.0 {
             let h = hash3(seed, j, 0xE3);
             let pick = (j as f32 + unit2(h).0) / n as f32;
-            let leaf = Receiver {
-                poly,
-                corners,
-                nrm,
-                x,
-            };
+            let leaf = Receiver { poly, nrm, x };
             cast += emitted_light(
                 st,
                 ws,
@@ -273,12 +274,16 @@ struct Share {
     weight: f32,
     side: usize,
     reciprocal: bool,
+    /// For `reciprocal`: the emitter's form factor to the whole leaf times its area over the
+    /// leaf's, over the emitter's quadrature points (the form factor to a leaf whose edge
+    /// passes under a small lamp changes across the lamp). It does not depend on the
+    /// sample point.
+    f_leaf: f32,
 }
 
-/// A receiving leaf patch and one sample point of it.
-struct Receiver<'a> {
+/// A sample point of a receiving leaf patch of polygon `poly`, facing `nrm`.
+struct Receiver {
     poly: u32,
-    corners: &'a [Vec3],
     nrm: Vec3,
     x: Vec3,
 }
@@ -303,7 +308,7 @@ fn emitter_shares(
             continue;
         }
         let lp = st.polygon(ws, l);
-        let (lc, k) = root_corners(st, ws, Elem(lp.root));
+        let (lc, k) = patch_corners(st, ws, Elem(lp.root));
         let l_normal = Vec3::from(lp.normal);
         let Some(side) = facing_side(centre, lc[0], l_normal) else {
             continue;
@@ -325,10 +330,23 @@ fn emitter_shares(
         // Seen at the centre or not, a part of the emitter may show elsewhere on the leaf:
         // keep a floor so that it can still be drawn.
         let f = if f.is_finite() { f.max(1e-6) } else { 0.0 };
+        let f_leaf = if reciprocal && area > 0.0 {
+            let ln = if side == 0 { l_normal } else { -l_normal };
+            let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+            let q = quadrature(&lc[..k], &mut pts, &mut wts);
+            let mut fq = 0.0f32;
+            for (p, w) in pts[..q].iter().zip(&wts[..q]) {
+                fq += w * point_polygon(*p, ln, corners);
+            }
+            l_area * fq / area
+        } else {
+            0.0
+        };
         *s = Share {
             weight: e_max * f,
             side,
             reciprocal,
+            f_leaf,
         };
         total += e_max * f;
     }
@@ -353,7 +371,7 @@ fn emitted_light<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
     vis: &V,
-    leaf: &Receiver<'_>,
+    leaf: &Receiver,
     em: &Emitters,
     shares: &[Share; MAX_DIRECT_EMITTERS],
     total: f32,
@@ -380,7 +398,7 @@ fn emitted_light<V: Visibility + ?Sized>(
     let share = shares[chosen];
     let l = em.ids[chosen];
     let lp = st.polygon(ws, l);
-    let (lc, k) = root_corners(st, ws, Elem(lp.root));
+    let (lc, k) = patch_corners(st, ws, Elem(lp.root));
     let m = st.material(ws, lp.material);
     let (x, n) = (leaf.x, leaf.nrm);
     // A point of the emitter in front of x (a few draws: an emitter that straddles the
@@ -392,22 +410,7 @@ fn emitted_light<V: Visibility + ?Sized>(
             continue;
         }
         let f = if share.reciprocal {
-            let area = polygon_area(leaf.corners);
-            let l_normal = Vec3::from(lp.normal);
-            let ln = if share.side == 0 { l_normal } else { -l_normal };
-            if area > 0.0 {
-                // Over the emitter's quadrature points: the form factor to a leaf whose
-                // edge passes under a small lamp changes across the lamp.
-                let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
-                let q = quadrature(&lc[..k], &mut pts, &mut wts);
-                let mut f = 0.0f32;
-                for (p, w) in pts[..q].iter().zip(&wts[..q]) {
-                    f += w * point_polygon(*p, ln, leaf.corners);
-                }
-                polygon_area(&lc[..k]) * f / area
-            } else {
-                0.0
-            }
+            share.f_leaf
         } else {
             point_polygon(x, n, &lc[..k])
         };
@@ -427,7 +430,7 @@ fn emitted_light<V: Visibility + ?Sized>(
 }
 
 /// A patch's corners and their count.
-fn root_corners(st: &State, ws: &[u8], e: Elem) -> ([Vec3; 4], usize) {
+fn patch_corners(st: &State, ws: &[u8], e: Elem) -> ([Vec3; 4], usize) {
     let p = st.patch(ws, e);
     let mut corners = [Vec3::ZERO; 4];
     for (c, src) in corners.iter_mut().zip(p.corners) {
@@ -448,7 +451,7 @@ pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> El
         let mut best = (f32::NEG_INFINITY, Elem::new(e.kind(), p.first_child));
         for j in 0..4 {
             let child = Elem::new(e.kind(), p.first_child + j);
-            let (corners, k) = root_corners(st, ws, child);
+            let (corners, k) = patch_corners(st, ws, child);
             // The child's own orientation (children keep their parent's, but a flipped input
             // corner order must not send the point to the wrong child).
             let own = (corners[1] - corners[0]).cross(corners[k - 1] - corners[0]);
@@ -469,11 +472,6 @@ pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> El
         e = best.1;
     }
 }
-
-/// The relighting passes cast this many times fewer rays per side than the polygons'
-/// gather (1: as many), and at least [`RELIGHT_MIN`].
-const RELIGHT_SHARE: u32 = 1;
-const RELIGHT_MIN: u32 = 16;
 
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a mut State,
@@ -500,10 +498,9 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
     if full == 0 {
         return 0;
     }
-    // The same rays as the polygons' gather: a quarter of them (the noise of what a leaf
-    // shows others should average out where they read it) made a random scene (a 2.5 cm
-    // lamp 200 m over a 790 m floor) create 3.6% of its light; with all of them 1.9%.
-    let rays = (full / RELIGHT_SHARE).max(RELIGHT_MIN);
+    // As many rays as the polygons' gather: a quarter of them made a random scene (a
+    // 2.5 cm lamp 200 m over a 790 m floor) create 3.6% of its light, all of them 1.9%.
+    let rays = full;
     let nb = st.bands;
     let per = 1 + 2 * nb;
     let em = emitters(st, ws);
@@ -537,14 +534,9 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
                         continue;
                     }
                     let rec = c.st.polygon(c.ws, p.poly);
-                    let total = c.st.patch(c.ws, Elem(rec.root)).area as f64;
-                    let share = if total > 0.0 {
-                        c.rays as f64 * p.area as f64 / total
-                    } else {
-                        c.rays as f64
-                    };
-                    let g = libm::ceil(libm::sqrt(share)).max(1.0) as u32;
-                    let (corners, k) = root_corners(c.st, c.ws, e);
+                    let total = c.st.patch(c.ws, Elem(rec.root)).area;
+                    let g = leaf_grid(c.rays, p.area, total);
+                    let (corners, k) = patch_corners(c.st, c.ws, e);
                     let normal = Vec3::from(rec.normal);
                     let mut cast = 0u32;
                     for side in 0..State::sides(e) {

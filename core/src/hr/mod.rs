@@ -540,10 +540,8 @@ where
     st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     st.stats.emitted_power = st.power;
-    if settings.final_passes > 1 {
-        for _ in 1..settings.final_passes {
-            st.stats.rays += final_gather::relight(&mut st, ws, &vis, &mut seq, progress);
-        }
+    for _ in 1..settings.final_passes {
+        st.stats.rays += final_gather::relight(&mut st, ws, &vis, &mut seq, progress);
     }
     st.stats.balance = balance::measure(&st, ws, &vis, &mut seq, 4 * settings.rays, progress);
     progress.report(output::phase(&st, ws), 0, st.polygons as u64);
