@@ -114,6 +114,9 @@ pub(crate) fn run_chunks<E: Executor, T>(
 {
     let mut start = 0;
     let mut batch = ex.batch();
+    // Announce the phase before its first batch, so that a caller timing phases by their
+    // reports charges this work to this phase, not to the one before.
+    report(0, n);
     while start < n {
         let end = (start + batch).min(n);
         let shared: &T = ctx;

@@ -152,8 +152,8 @@ pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progre
     let mut any = false;
     loop {
         st.stats.refinement_passes += 1;
-        let changed = refine_pass(st, ws) | refine_shadows(st, ws);
         progress.report("refining (links)", st.links.live() as u64, 0);
+        let changed = refine_pass(st, ws) | refine_shadows(st, ws);
         super::direct::prepare_pending(st, ws, vis, ex, progress);
         evaluate_pending(st, ws, vis, ex, progress);
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);

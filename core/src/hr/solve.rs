@@ -57,6 +57,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     st.stats.iteration_capped = false;
     st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
+        progress.report("solving (iterations)", it as u64, 0);
         gather(st, ws, ex, false, it == 0);
         push(st, ws);
         let jumped = extrapolate > 0.0;
@@ -64,7 +65,6 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         extrapolate = 0.0;
         iterations = it + 1;
         st.stats.iterations += 1;
-        progress.report("solving (iterations)", it as u64 + 1, 0);
         if !(change.is_finite() && b_max.is_finite()) {
             // Radiosity without bound (an operator that gives back more than it takes): no
             // tolerance can be met, and every comparison with it would pass.

@@ -5,9 +5,11 @@ use hirad_core::hr::Executor;
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Runs a batch of chunks on a pool of `threads` threads.
+/// Runs a batch of chunks on a pool of `threads` threads; with one thread, on the caller's
+/// own (handing each batch to a pool thread and waiting for it cost more than the work in
+/// small scenes: a Cornell box solve spent most of its time waking threads).
 pub struct RayonExecutor {
-    pool: rayon::ThreadPool,
+    pool: Option<rayon::ThreadPool>,
     outputs: Vec<Vec<f32>>,
     first: usize,
     batch: usize,
@@ -16,10 +18,16 @@ pub struct RayonExecutor {
 impl RayonExecutor {
     /// A pool of `threads` threads (at least 1).
     pub fn new(threads: usize) -> anyhow::Result<Self> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.max(1))
-            .thread_name(|i| format!("hirad-{i}"))
-            .build()?;
+        let pool = if threads > 1 {
+            Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .thread_name(|i| format!("hirad-{i}"))
+                    .build()?,
+            )
+        } else {
+            None
+        };
         Ok(RayonExecutor {
             pool,
             outputs: Vec::new(),
@@ -30,7 +38,7 @@ impl RayonExecutor {
 
     /// Threads in the pool.
     pub fn threads(&self) -> usize {
-        self.pool.current_num_threads()
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
     }
 }
 
@@ -52,11 +60,19 @@ impl Executor for RayonExecutor {
         self.first = chunks.start;
         let start = chunks.start;
         let outs = &mut self.outputs[..n];
-        self.pool.install(|| {
-            outs.par_iter_mut()
-                .enumerate()
-                .for_each(|(k, out)| work(start + k, out));
-        });
+        match &self.pool {
+            // A single chunk gains nothing from another thread.
+            Some(pool) if n > 1 => pool.install(|| {
+                outs.par_iter_mut()
+                    .enumerate()
+                    .for_each(|(k, out)| work(start + k, out));
+            }),
+            _ => {
+                for (k, out) in outs.iter_mut().enumerate() {
+                    work(start + k, out);
+                }
+            }
+        }
         true
     }
 
