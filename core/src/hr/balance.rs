@@ -152,7 +152,7 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
 /// Most rays for one leaf side.
 const MAX_RAYS: u32 = 16_384;
 /// Rays for the whole scene at least.
-const MIN_BUDGET: f64 = 65_536.0;
+const MIN_BUDGET: f64 = 16_384.0;
 
 /// The largest band's power leaving a leaf (W, its sides together).
 fn leaving(st: &State, ws: &[u8], e: Elem, p: &super::records::Patch) -> f32 {

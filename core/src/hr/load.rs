@@ -102,6 +102,24 @@ pub(crate) fn load<S: SceneSource>(
             &rec,
         );
     }
+    // No iteration shrinks the change by less than the largest albedo (a side gives back
+    // at most rho + tau of what reaches it, and a leaf's coefficients sum to at most 1):
+    // the first solution's convergence test starts from that bound.
+    let mut albedo = 0.0f32;
+    for m in 0..info.materials {
+        let rec: Material = read(
+            ws,
+            lay.materials + m as usize * core::mem::size_of::<Material>(),
+        );
+        for b in 0..bands {
+            for side in 0..2 {
+                albedo = albedo.max(rec.rho[side][b] + rec.tau[b]);
+            }
+        }
+    }
+    if albedo < 1.0 {
+        s.contraction = albedo;
+    }
     // Sources: suns, then sky directions.
     for (k, light) in (0..info.suns)
         .map(|i| view.sun(LightId(i)))

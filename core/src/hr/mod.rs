@@ -292,6 +292,10 @@ pub struct Plan {
     pub link_bytes: u64,
 }
 
+/// Tolerance of the solutions between refinement rounds (relative to the largest radiosity;
+/// the last solution meets [`Settings::tolerance`]).
+const LOOSE_TOLERANCE: f32 = 1e-3;
+
 /// Aligns the workspace start; returns the usable part.
 fn aligned(ws: &mut [u8]) -> &mut [u8] {
     let skip = ws.as_ptr().align_offset(ALIGN).min(ws.len());
@@ -521,19 +525,29 @@ where
     solve::pull(&st, ws);
     st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
     refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
+    // While refinement goes on, each solution only guides the next refinement: it is taken
+    // to a looser tolerance; the last one (nothing left to refine) to the one asked for.
+    let loose = settings.tolerance.max(LOOSE_TOLERANCE);
+    let mut final_tolerance = false;
     for round in 0..settings.max_rounds {
         st.stats.rounds = round + 1;
         let refined = refine::refine_until_stable(&mut st, ws, &vis, &mut seq, progress);
         closure::update(&mut st, ws, &mut seq, progress);
-        solve::iterate(&mut st, ws, &mut seq, progress);
+        let last = !refined && round > 0;
+        final_tolerance = last || round + 1 == settings.max_rounds;
+        let tol = if final_tolerance { settings.tolerance } else { loose };
+        solve::iterate(&mut st, ws, &mut seq, progress, tol);
         if st.stats.diverged {
             break;
         }
         st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
-        if !refined && round > 0 {
+        if last {
             break;
         }
         refine::clear_examined(&mut st, ws);
+    }
+    if !final_tolerance && !st.stats.diverged {
+        solve::iterate(&mut st, ws, &mut seq, progress, settings.tolerance);
     }
     st.stats.links = st.links.live() as u64;
     st.stats.clusters = st.clusters as u64;

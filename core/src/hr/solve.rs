@@ -42,6 +42,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     ws: &mut [u8],
     ex: &mut Fallback<'_, E>,
     progress: &mut P,
+    tolerance: f32,
 ) -> u32 {
     let mut ratios = [0.0f32; WINDOW];
     let mut changes = [0.0f32; WINDOW];
@@ -54,6 +55,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     // The contraction of the previous solution (the same operator, refined): a warm start
     // may begin right at the answer, where rounding hides it.
     let mut q_known = st.contraction;
+    let q_before = st.contraction;
     st.stats.iteration_capped = false;
     st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
@@ -75,7 +77,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         }
         let scale = b_max.max(f32::MIN_POSITIVE);
         last_scale = scale;
-        let tol = st.settings.tolerance * scale;
+        let tol = tolerance * scale;
         if change <= tol * 1e-3 {
             remaining = change / scale;
             st.stats.converged = true;
@@ -95,6 +97,20 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
             settled += 1;
         }
         last = change;
+        // Warm started with the contraction of the solution before (the same operator, or
+        // one refined a little): the tail is judged with the larger of that and the ratios
+        // seen so far, without waiting for a window of its own.
+        if (1..WINDOW).contains(&settled) && q_before < 1.0 {
+            let q = ratios[..settled].iter().copied().fold(q_before, f32::max);
+            if q < 1.0 {
+                let tail = change * q / (1.0 - q);
+                if tail <= tol && change <= tol {
+                    remaining = tail / scale;
+                    st.stats.converged = true;
+                    break;
+                }
+            }
+        }
         if settled >= WINDOW {
             let q = ratios.iter().copied().fold(0.0f32, f32::max);
             let q_min = ratios.iter().copied().fold(f32::INFINITY, f32::min);
@@ -124,7 +140,7 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
                 if !remaining.is_finite() {
                     // Never seen contracting, and already still: nothing left to change.
                     remaining = floor / scale;
-                    st.stats.converged = remaining <= st.settings.tolerance;
+                    st.stats.converged = remaining <= tolerance;
                 }
                 break;
             }
