@@ -9,6 +9,10 @@ use super::Settings;
 use super::census::Census;
 use super::records::*;
 
+/// Growing pools sharing the blocks: one-sided patches, two-sided patches, links, emission
+/// bins of large clusters.
+pub(crate) const POOLS: usize = 4;
+
 /// Alignment of every region (bytes).
 pub(crate) const ALIGN: usize = 16;
 
@@ -38,6 +42,8 @@ pub(crate) struct Strides {
     pub link: usize,
     /// Coefficients per link: 1 without two-sided materials, 4 with.
     pub link_k: usize,
+    /// A large cluster's emission bins (see `oriented::update_bins`).
+    pub bins: usize,
 }
 
 impl Strides {
@@ -57,6 +63,7 @@ impl Strides {
             source: core::mem::size_of::<Source>() + 4 * bands,
             link: core::mem::size_of::<Link>() + 4 * link_k + 4 * bands,
             link_k,
+            bins: 4 * super::oriented::bin_floats(bands),
         }
     }
 
@@ -99,7 +106,7 @@ pub(crate) struct Layout {
     /// Bytes of the core's own BVH (nodes, then primitive order), after `main_bytes`; 0 when
     /// the caller brings its own visibility.
     pub bvh_bytes: usize,
-    pub tables: [usize; 3],
+    pub tables: [usize; POOLS],
     pub blocks_base: usize,
     pub block_size: usize,
     pub block_count: u32,
@@ -179,24 +186,20 @@ impl Layout {
             return None;
         }
         // Blocks and their tables share what is left: each block costs its bytes plus one
-        // table entry in each of the three pools.
+        // table entry in each pool.
         let dynamic = total - before_tables;
         let size = block_size(dynamic);
-        let mut count = (dynamic / (size + 12)) as u32;
+        let mut count = (dynamic / (size + 4 * POOLS)) as u32;
         loop {
-            let tables = 3 * up(count as usize * 4);
+            let tables = POOLS * up(count as usize * 4);
             if before_tables + tables + count as usize * size <= total || count == 0 {
                 break;
             }
             count -= 1;
         }
         let table_bytes = up(count as usize * 4);
-        let tables = [
-            before_tables,
-            before_tables + table_bytes,
-            before_tables + 2 * table_bytes,
-        ];
-        let blocks_base = before_tables + 3 * table_bytes;
+        let tables = core::array::from_fn(|k| before_tables + k * table_bytes);
+        let blocks_base = before_tables + POOLS * table_bytes;
         Some(Layout {
             strides,
             materials: materials_at,

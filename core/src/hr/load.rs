@@ -71,6 +71,7 @@ pub(crate) fn load<S: SceneSource>(
             Pool::new(st.patch2, &blocks, lay.tables[1]),
         ],
         links: Pool::new(st.link, &blocks, lay.tables[2]),
+        bins: Pool::new(st.bins, &blocks, lay.tables[3]),
         settings: *settings,
         bands,
         clusters: 0,
@@ -189,7 +190,7 @@ fn new_cluster(s: &mut State, ws: &mut [u8], parent: u32) -> Result<u32, HrError
         area: 0.0,
         polygons: 0,
         first_polygon: 0,
-        reserved: 0,
+        bins: NONE,
     };
     s.set_cluster(ws, i, &c);
     let e = Elem::new(Kind::Cluster, i);

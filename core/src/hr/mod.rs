@@ -395,7 +395,9 @@ fn plan_from<S: SceneSource>(
     } else {
         st.patch1 as f64
     };
-    let grow = patches * patch_avg + links * st.link as f64;
+    // Emission bins: at most one cluster in 16 polygons is large enough to keep them.
+    let bins = polys / 16.0 * st.bins as f64;
+    let grow = patches * patch_avg + links * st.link as f64 + bins;
     let suggested = (min_bytes as f64 + grow * 1.05)
         .max(16.0 * 1024.0 * 1024.0)
         .min(u64::MAX as f64 / 2.0) as u64;
@@ -512,6 +514,7 @@ where
         }
     };
     st.stats.workspace_bytes = total as u64;
+    oriented::allocate_bins(&mut st, ws);
     progress.report("loaded (polygons)", st.polygons as u64, st.polygons as u64);
     let mut seq = exec::Fallback {
         inner: executor,
@@ -535,7 +538,11 @@ where
         closure::update(&mut st, ws, &mut seq, progress);
         let last = !refined && round > 0;
         final_tolerance = last || round + 1 == settings.max_rounds;
-        let tol = if final_tolerance { settings.tolerance } else { loose };
+        let tol = if final_tolerance {
+            settings.tolerance
+        } else {
+            loose
+        };
         solve::iterate(&mut st, ws, &mut seq, progress, tol);
         if st.stats.diverged {
             break;

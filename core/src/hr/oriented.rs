@@ -49,6 +49,184 @@ pub(crate) fn centre(st: &State, ws: &[u8], e: Elem) -> Vec3 {
     }
 }
 
+/// Directions by which a large cluster's emitting sides are binned (see [`update_bins`]).
+pub(crate) const BINS: usize = 26;
+
+/// Clusters of more polygons than this keep emission bins; smaller ones sum their polygons
+/// (as cheap, and exact).
+pub(crate) const BINNED: u32 = 32;
+
+/// Floats of a cluster's emission bins: per bin and band, the power-weighted normal (3) and
+/// the power (1).
+pub(crate) const fn bin_floats(bands: usize) -> usize {
+    BINS * bands * 4
+}
+
+/// The bin of a unit normal: each coordinate rounded to -1, 0 or 1 at +-sin 22.5 degrees,
+/// the 26 directions of a cube's faces, edges and corners (no unit vector rounds to 0, 0, 0).
+fn bin_of(n: Vec3) -> usize {
+    const T: f32 = 0.382_683_43;
+    let q = |x: f32| {
+        if x > T {
+            2
+        } else if x < -T {
+            0
+        } else {
+            1
+        }
+    };
+    let i = q(n.x) * 9 + q(n.y) * 3 + q(n.z);
+    match i {
+        // Not a unit vector (cannot happen for a checked polygon): along its largest axis.
+        13 => {
+            let a = n.abs();
+            if a.x >= a.y && a.x >= a.z {
+                if n.x >= 0.0 { 21 } else { 4 }
+            } else if a.y >= a.z {
+                if n.y >= 0.0 { 15 } else { 10 }
+            } else if n.z >= 0.0 {
+                13
+            } else {
+                12
+            }
+        }
+        i if i > 13 => i - 1,
+        i => i,
+    }
+}
+
+/// The sine of the largest angle between a normal and the centre of its bin (32.74 degrees,
+/// at the corners of a face bin): a direction within 90 degrees less that of a bin's centre
+/// is faced by every normal in it.
+const BIN_SPREAD: f32 = 0.541;
+
+/// The unit direction at the centre of bin `bin` (see [`bin_of`]).
+fn bin_centre(bin: usize) -> Vec3 {
+    let i = if bin >= 13 { bin + 1 } else { bin } as i32;
+    let d = Vec3::new(
+        (i / 9 - 1) as f32,
+        ((i / 3) % 3 - 1) as f32,
+        (i % 3 - 1) as f32,
+    );
+    let k = d.x.abs() + d.y.abs() + d.z.abs();
+    d * if k >= 3.0 {
+        0.577_350_26
+    } else if k >= 2.0 {
+        core::f32::consts::FRAC_1_SQRT_2
+    } else {
+        1.0
+    }
+}
+
+/// Gives every cluster of more than [`BINNED`] polygons its emission bins, while the
+/// workspace has room (a cluster without them sums its polygons: slower, and exact).
+pub(crate) fn allocate_bins(st: &mut State, ws: &mut [u8]) {
+    for i in 0..st.clusters {
+        let mut c = st.cluster(ws, i);
+        if c.polygons <= BINNED {
+            continue;
+        }
+        let mut blocks = st.blocks;
+        let Some(k) = st.bins.alloc_run(ws, &mut blocks, 1) else {
+            return;
+        };
+        st.blocks = blocks;
+        c.bins = k;
+        st.set_cluster(ws, i, &c);
+    }
+}
+
+/// Recomputes the emission bins of every large cluster from its polygons' powers (with
+/// `unit`, their exposed areas: every emitting side at radiosity 1, see `closure`).
+///
+/// Towards a direction `w` a cluster radiates `sum_p P_p max(0, n_p . w) / pi` over its
+/// polygons' emitting sides (normal `n_p`, power `P_p`): a sum over every polygon for every
+/// link and iteration, which in a tree of 100,000 leaves is most of the solve. Binned by
+/// normal, each bin keeps `V = sum P n` and `S = sum P`; a bin wholly on the lit side of `w`
+/// gives `V . w` exactly, one the terminator crosses is taken as a uniform cone of normals of
+/// collimation `|V| / S` ([`cone_share`], the same integral with normals and light
+/// exchanged). Children come after their parents in cluster order, so one reverse pass adds
+/// each child's bins to its parent's.
+pub(crate) fn update_bins(st: &State, ws: &mut [u8], unit: bool) {
+    let nb = st.bands;
+    let len = bin_floats(nb);
+    let mut acc = [0.0f32; BINS * 8 * 4];
+    for i in (0..st.clusters).rev() {
+        let c = st.cluster(ws, i);
+        if c.bins == NONE {
+            continue;
+        }
+        acc[..len].fill(0.0);
+        for k in 0..c.child_count {
+            let child = st.child(ws, c.children + k);
+            match child.kind() {
+                Kind::Cluster => {
+                    let cc = st.cluster(ws, child.index());
+                    if cc.bins != NONE {
+                        for (a, v) in acc[..len].iter_mut().zip(bins(st, ws, cc.bins)) {
+                            *a += v;
+                        }
+                    } else {
+                        for j in cc.first_polygon..cc.first_polygon + cc.polygons {
+                            add_to_bins(st, ws, st.ordered(ws, j), unit, &mut acc[..len]);
+                        }
+                    }
+                }
+                _ => {
+                    let poly = st.patch(ws, child).poly;
+                    add_to_bins(st, ws, poly, unit, &mut acc[..len]);
+                }
+            }
+        }
+        bins_mut(st, ws, c.bins).copy_from_slice(&acc[..len]);
+    }
+}
+
+fn bins<'a>(st: &State, ws: &'a [u8], k: u32) -> &'a [f32] {
+    let at = st.bins.at(ws, &st.blocks, k);
+    super::pool::floats(ws, at, bin_floats(st.bands))
+}
+
+fn bins_mut<'a>(st: &State, ws: &'a mut [u8], k: u32) -> &'a mut [f32] {
+    let at = st.bins.at(ws, &st.blocks, k);
+    super::pool::floats_mut(ws, at, bin_floats(st.bands))
+}
+
+/// Adds polygon `poly`'s emitting sides to bins `acc`.
+fn add_to_bins(st: &State, ws: &[u8], poly: u32, unit: bool, acc: &mut [f32]) {
+    let nb = st.bands;
+    let rec = st.polygon(ws, poly);
+    let n = Vec3::from(rec.normal);
+    let root = Elem(rec.root);
+    let sides = State::sides(root);
+    let seen = if unit {
+        let p = st.patch(ws, root);
+        p.area * p.exposed
+    } else {
+        0.0
+    };
+    for side in 0..2 {
+        let d = if side == 0 { n } else { -n };
+        let at = bin_of(d) * nb * 4;
+        let power = st.polygon_power(ws, poly, side);
+        for (k, &p) in power.iter().enumerate().take(nb) {
+            let p = if unit {
+                if side < sides { seen } else { 0.0 }
+            } else {
+                p
+            };
+            if p <= 0.0 {
+                continue;
+            }
+            let a = &mut acc[at + 4 * k..at + 4 * k + 4];
+            a[0] += p * d.x;
+            a[1] += p * d.y;
+            a[2] += p * d.z;
+            a[3] += p;
+        }
+    }
+}
+
 /// The radiosity (W/m^2 per band) that a cluster's isotropic kernel must carry towards the
 /// unit direction `w` so that the link transfers the intensity of its polygons: `4 pi I(w) /
 /// A`.
@@ -57,6 +235,40 @@ pub(crate) fn emission(st: &State, ws: &[u8], cluster: u32, w: Vec3, unit: bool,
     out.fill(0.0);
     let c = st.cluster(ws, cluster);
     if c.area <= 0.0 {
+        return;
+    }
+    if c.bins != NONE {
+        let nb = st.bands;
+        let b = bins(st, ws, c.bins);
+        for bin in 0..BINS {
+            let cw = bin_centre(bin).dot(w);
+            if cw <= -BIN_SPREAD {
+                // Every normal of the bin faces away from w.
+                continue;
+            }
+            for (k, o) in out.iter_mut().enumerate().take(nb) {
+                let a = &b[(bin * nb + k) * 4..(bin * nb + k) * 4 + 4];
+                let s = a[3];
+                if s <= 0.0 {
+                    continue;
+                }
+                let v = Vec3::new(a[0], a[1], a[2]);
+                let vw = v.dot(w);
+                let len = v.length();
+                *o += if cw >= BIN_SPREAD {
+                    // Every normal of the bin faces w: exact.
+                    vw
+                } else if len > 0.0 {
+                    s * cone_share((len / s).min(1.0), vw / len)
+                } else {
+                    0.25 * s
+                };
+            }
+        }
+        let s = 4.0 / c.area;
+        for o in out.iter_mut() {
+            *o *= s;
+        }
         return;
     }
     for k in c.first_polygon..c.first_polygon + c.polygons {

@@ -84,8 +84,8 @@ pub(crate) struct Cluster {
     /// First of its polygons in the cluster-order array (a cluster's polygons are
     /// consecutive there).
     pub first_polygon: u32,
-    /// Unused.
-    pub reserved: u32,
+    /// Its emission bins (see `oriented::update_bins`) in the bins pool, or NONE.
+    pub bins: u32,
 }
 
 /// A directional source: a sun or one sky direction.

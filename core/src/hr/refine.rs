@@ -187,6 +187,31 @@ fn b_max(st: &State, ws: &[u8], e: Elem) -> f32 {
     m
 }
 
+/// True when a receiving cluster's box lies wholly behind a one-sided emitting patch's
+/// plane, where nothing it sends can arrive.
+fn hidden_behind(rs: &Shape, es: &Shape) -> bool {
+    let (
+        Shape::Cluster { min, max, .. },
+        Shape::Patch {
+            corners,
+            normal,
+            two_sided: false,
+            ..
+        },
+    ) = (*rs, *es)
+    else {
+        return false;
+    };
+    (0..8).all(|k| {
+        let c = Vec3::new(
+            if k & 1 == 0 { min.x } else { max.x },
+            if k & 2 == 0 { min.y } else { max.y },
+            if k & 4 == 0 { min.z } else { max.z },
+        );
+        normal.dot(c - corners[0]) <= 0.0
+    })
+}
+
 /// Area through which an element receives (m^2): a patch's area; for a cluster, the mean
 /// projected area of its surfaces, at most that of its box.
 fn receiving_area(shape: &Shape) -> f32 {
@@ -483,16 +508,25 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                 }
                 let emit = Elem(l.emit);
                 let self_link = l.recv == l.emit;
-                if !self_link && l.k_open <= 0.0 {
-                    // No exchange at all (facing away or coplanar): drop it.
+                let es = st.shape(ws, emit);
+                // No exchange seen. Between patches the open coefficient is exact at the
+                // quadrature points (facing away, coplanar): drop the link. A cluster is seen
+                // through a few sample points, which may all miss what faces the emitter (a
+                // room sampled once on its ceiling, behind the lamp, lost the lamp's light):
+                // unless the emitter's plane hides the whole cluster, split it and look
+                // closer.
+                let dark = !self_link && l.k_open <= 0.0;
+                if dark && (recv.is_patch() || hidden_behind(&rs, &es) || !can_split(st, ws, recv))
+                {
                     unlink(st, ws, recv, prev, cur, next);
                     free_link(st, ws, cur);
                     cur = next;
                     continue;
                 }
-                let es = st.shape(ws, emit);
                 let split = if self_link {
                     Some(split_self(st, ws, recv))
+                } else if dark {
+                    Some(split_link(st, ws, recv, emit, true))
                 } else {
                     decide(st, ws, recv, emit, &l, cur, &rs, &es, threshold)
                         .map(|on_recv| split_link(st, ws, recv, emit, on_recv))

@@ -18,6 +18,8 @@ pub(crate) struct State {
     /// One-sided and two-sided patches.
     pub patches: [Pool; 2],
     pub links: Pool,
+    /// Emission bins of large clusters (see `oriented::update_bins`).
+    pub bins: Pool,
     pub settings: Settings,
     pub bands: usize,
     /// Clusters created so far.
