@@ -18,9 +18,9 @@
 //! Every sample comes from a hash of the patch and the sample number, so results never
 //! depend on the thread count.
 
-use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::exec::{Executor, Fallback, Progress, run_chunks_scaled};
 use super::ids::{Elem, Kind};
-use super::layout::CHUNK;
+use super::layout::{CHUNK, FINE_CHUNK};
 use super::records::*;
 use super::state::State;
 use super::vis::{Ray, Vis, WsPolygons};
@@ -50,24 +50,35 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
 ) {
     let nb = st.bands;
     let out = st.lay.strides.prepare_out();
-    for kind in [Kind::Patch1, Kind::Patch2] {
+    for (pool, kind) in [Kind::Patch1, Kind::Patch2].into_iter().enumerate() {
+        // Only the patches made since the last call (they come at the end of the pool).
         let n = st.pool(kind).len as usize;
+        let first = (st.prepared[pool] as usize).min(n);
+        st.prepared[pool] = n as u32;
+        let count = n - first;
+        if count == 0 {
+            continue;
+        }
+        let items = move |chunk: usize| {
+            first + chunk * FINE_CHUNK..(first + (chunk + 1) * FINE_CHUNK).min(n)
+        };
         let mut ctx = Ctx {
             st: &mut *st,
             ws: &mut *ws,
             vis,
         };
-        run_chunks(
+        run_chunks_scaled(
             ex,
             &mut ctx,
-            n.div_ceil(CHUNK),
-            CHUNK * out,
+            count.div_ceil(FINE_CHUNK),
+            CHUNK / FINE_CHUNK,
+            FINE_CHUNK * out,
             |c: &Ctx<'_, '_, V>, chunk, buf| {
                 let ray = Ray {
                     vis: c.vis,
                     polys: WsPolygons { st: c.st, ws: c.ws },
                 };
-                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                for (slot, i) in items(chunk).enumerate() {
                     let o = &mut buf[slot * out..(slot + 1) * out];
                     let e = Elem::new(kind, i as u32);
                     let p = c.st.patch(c.ws, e);
@@ -79,7 +90,7 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
                 }
             },
             |c: &mut Ctx<'_, '_, V>, chunk, buf| {
-                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+                for (slot, i) in items(chunk).enumerate() {
                     let o = &buf[slot * out..(slot + 1) * out];
                     if o[0].is_nan() {
                         continue;
@@ -102,8 +113,8 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
             &mut |done, total| {
                 progress.report(
                     "lighting patches",
-                    (done * CHUNK).min(n) as u64,
-                    (total * CHUNK).min(n) as u64,
+                    (done * FINE_CHUNK).min(count) as u64,
+                    (total * FINE_CHUNK).min(count) as u64,
                 )
             },
         );

@@ -107,13 +107,31 @@ pub(crate) fn run_chunks<E: Executor, T>(
     n: usize,
     out_len: usize,
     work: impl Fn(&T, usize, &mut [f32]) + Sync,
+    apply: impl FnMut(&mut T, usize, &[f32]),
+    report: &mut dyn FnMut(usize, usize),
+) where
+    T: Sync,
+{
+    run_chunks_scaled(ex, ctx, n, 1, out_len, work, apply, report)
+}
+
+/// [`run_chunks`] with `scale` times the executor's batch per call: for chunks `scale`
+/// times smaller than [`super::layout::CHUNK`], so that a call covers as many items.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_chunks_scaled<E: Executor, T>(
+    ex: &mut Fallback<'_, E>,
+    ctx: &mut T,
+    n: usize,
+    scale: usize,
+    out_len: usize,
+    work: impl Fn(&T, usize, &mut [f32]) + Sync,
     mut apply: impl FnMut(&mut T, usize, &[f32]),
     report: &mut dyn FnMut(usize, usize),
 ) where
     T: Sync,
 {
     let mut start = 0;
-    let mut batch = ex.batch();
+    let mut batch = ex.batch() * scale.max(1);
     // Announce the phase before its first batch, so that a caller timing phases by their
     // reports charges this work to this phase, not to the one before.
     report(0, n);

@@ -27,6 +27,10 @@ pub(crate) const GROUP_ITEM_BYTES: usize = 16;
 /// Links evaluated or receivers gathered per chunk of work (fixed: results never depend on
 /// how many threads share the chunks).
 pub(crate) const CHUNK: usize = 64;
+/// Items per chunk in the phases where one item costs many rays (lighting a patch,
+/// evaluating a link) and only the new ones are worked on: after a refinement pass they can
+/// be a few hundred, and chunks of 64 would leave threads idle.
+pub(crate) const FINE_CHUNK: usize = 8;
 
 /// Record strides of a scene.
 #[derive(Clone, Copy, Debug)]

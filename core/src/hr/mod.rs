@@ -294,7 +294,7 @@ pub struct Plan {
 
 /// Tolerance of the solutions between refinement rounds (relative to the largest radiosity;
 /// the last solution meets [`Settings::tolerance`]).
-const LOOSE_TOLERANCE: f32 = 1e-3;
+const LOOSE_TOLERANCE: f32 = 1e-2;
 
 /// Aligns the workspace start; returns the usable part.
 fn aligned(ws: &mut [u8]) -> &mut [u8] {

@@ -414,15 +414,17 @@ pub(crate) fn link_fluxes<E: Executor>(
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                 let l = c.st.link(c.ws, i as u32);
                 let recv = Elem(l.recv);
-                if l.flags & super::records::FREE != 0
-                    || recv.kind() != Kind::Cluster
-                    || l.recv == l.emit
-                {
+                let o = &mut buf[slot * nb..(slot + 1) * nb];
+                if l.flags & super::records::FREE != 0 || recv.kind() != Kind::Cluster {
+                    // Not a cluster's: the (sequential) apply skips it unread.
+                    o[0] = f32::NAN;
+                    continue;
+                }
+                if l.recv == l.emit {
                     continue;
                 }
                 let k = c.st.link_k(c.ws, i as u32);
                 let at = centre(c.st, c.ws, recv);
-                let o = &mut buf[slot * nb..(slot + 1) * nb];
                 for s in 0..kk.min(2) {
                     let coef = if kk == 1 { k[0] } else { k[s] };
                     if coef == 0.0
@@ -447,8 +449,7 @@ pub(crate) fn link_fluxes<E: Executor>(
         },
         |c: &mut Ctx<'_>, chunk, buf| {
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                let l = c.st.link(c.ws, i as u32);
-                if l.flags & super::records::FREE != 0 || Elem(l.recv).kind() != Kind::Cluster {
+                if buf[slot * nb].is_nan() {
                     continue;
                 }
                 c.st.link_flux_mut(c.ws, i as u32)

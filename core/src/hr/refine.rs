@@ -9,9 +9,9 @@
 //! and the run is marked as limited by its budget.
 
 use super::eval::evaluate;
-use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::exec::{Executor, Fallback, Progress, run_chunks_scaled};
 use super::ids::{Elem, Kind};
-use super::layout::CHUNK;
+use super::layout::{CHUNK, FINE_CHUNK};
 use super::records::*;
 use super::state::{Shape, State};
 use super::vis::{Ray, Vis, WsPolygons};
@@ -51,6 +51,11 @@ pub(crate) fn add_link(
     );
     st.link_k_mut(ws, i).fill(0.0);
     st.set_links_head(ws, recv, i);
+    if flags & PENDING != 0 {
+        st.pending = (st.pending.0.min(i), st.pending.1.max(i + 1));
+    }
+    let t = &mut st.touched[kind_slot(recv.kind())];
+    *t = (t.0.min(recv.index()), t.1.max(recv.index() + 1));
     st.stats.peak_links = st.stats.peak_links.max(st.links.live() as u64);
     Some(i)
 }
@@ -78,27 +83,41 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
     ex: &mut Fallback<'_, E>,
     progress: &mut dyn Progress,
 ) {
-    let n = st.links.len as usize;
+    // Only the range where links were added since the last evaluation.
+    let (first, n) = (
+        st.pending.0 as usize,
+        (st.pending.1 as usize).min(st.links.len as usize),
+    );
+    st.pending = (u32::MAX, 0);
+    if first >= n {
+        return;
+    }
+    let count = n - first;
     let out = st.lay.strides.eval_out();
     let kk = st.lay.strides.link_k;
+    let items =
+        move |chunk: usize| first + chunk * FINE_CHUNK..(first + (chunk + 1) * FINE_CHUNK).min(n);
     let mut ctx = Ctx { st, ws, vis };
-    run_chunks(
+    run_chunks_scaled(
         ex,
         &mut ctx,
-        n.div_ceil(CHUNK),
-        CHUNK * out,
+        count.div_ceil(FINE_CHUNK),
+        CHUNK / FINE_CHUNK,
+        FINE_CHUNK * out,
         |c: &Ctx<'_, '_, V>, chunk, buf| {
             let ray = Ray {
                 vis: c.vis,
                 polys: WsPolygons { st: c.st, ws: c.ws },
             };
-            for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
+            for (slot, i) in items(chunk).enumerate() {
                 let l = c.st.link(c.ws, i as u32);
+                let o = &mut buf[slot * out..(slot + 1) * out];
                 if l.flags & (PENDING | FREE) != PENDING {
+                    // Nothing to apply: the (sequential) apply skips it unread.
+                    o[kk + 2] = -1.0;
                     continue;
                 }
                 let co = evaluate(c.st, c.ws, Elem(l.recv), Elem(l.emit), &ray);
-                let o = &mut buf[slot * out..(slot + 1) * out];
                 if kk == 1 {
                     o[0] = co.k[0][0];
                 } else {
@@ -113,12 +132,12 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
             }
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
-            for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                let mut l = c.st.link(c.ws, i as u32);
-                if l.flags & (PENDING | FREE) != PENDING {
+            for (slot, i) in items(chunk).enumerate() {
+                let o = &buf[slot * out..(slot + 1) * out];
+                if o[kk + 2] < 0.0 {
                     continue;
                 }
-                let o = &buf[slot * out..(slot + 1) * out];
+                let mut l = c.st.link(c.ws, i as u32);
                 c.st.link_k_mut(c.ws, i as u32).copy_from_slice(&o[..kk]);
                 l.k_open = o[kk];
                 l.dir = [o[kk + 3], o[kk + 4], o[kk + 5]];
@@ -134,8 +153,8 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
         &mut |done, total| {
             progress.report(
                 "evaluating links",
-                (done * CHUNK).min(n) as u64,
-                (total * CHUNK).min(n) as u64,
+                (done * FINE_CHUNK).min(count) as u64,
+                (total * FINE_CHUNK).min(count) as u64,
             )
         },
     );
@@ -167,12 +186,23 @@ pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progre
 /// Forgets which links were examined, so that the next pass looks at them again with new
 /// radiosities.
 pub(crate) fn clear_examined(st: &mut State, ws: &mut [u8]) {
+    st.touched = [(0, u32::MAX); 3];
+    st.shadow_checked = [0; 2];
     for i in 0..st.links.len {
         let mut l = st.link(ws, i);
         if l.flags & FREE == 0 && l.flags & EXAMINED != 0 {
             l.flags &= !EXAMINED;
             st.set_link(ws, i, &l);
         }
+    }
+}
+
+/// The slot of a receiver kind in [`State::touched`].
+fn kind_slot(k: Kind) -> usize {
+    match k {
+        Kind::Patch1 => 1,
+        Kind::Patch2 => 2,
+        _ => 0,
     }
 }
 
@@ -487,8 +517,12 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
     // pending links).
     let counts = [st.clusters, st.patches[0].len, st.patches[1].len];
     let kinds = [Kind::Cluster, Kind::Patch1, Kind::Patch2];
-    for (kind, count) in kinds.into_iter().zip(counts) {
-        for index in 0..count {
+    // Only receivers that got links since the last pass (or since examination was cleared)
+    // hold links left to examine; links added during this pass are for the next.
+    let touched = st.touched;
+    st.touched = [(u32::MAX, 0); 3];
+    for ((kind, count), (lo, hi)) in kinds.into_iter().zip(counts).zip(touched) {
+        for index in lo..hi.min(count) {
             let recv = Elem::new(kind, index);
             let mut prev = NONE;
             let mut cur = st.links_head(ws, recv);
@@ -501,7 +535,12 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
             while cur != NONE {
                 let l = st.link(ws, cur);
                 let next = l.next;
-                if l.flags & (PENDING | EXAMINED) != 0 {
+                // New links go to the head of their receiver's list, and every link a pass
+                // walks ends examined or removed: past the first examined link, all are.
+                if l.flags & EXAMINED != 0 {
+                    break;
+                }
+                if l.flags & PENDING != 0 {
                     prev = cur;
                     cur = next;
                     continue;
@@ -574,8 +613,13 @@ fn refine_shadows(st: &mut State, ws: &mut [u8]) -> bool {
     let threshold = st.settings.epsilon * st.power;
     let mut changed = false;
     for (kind, pool) in [(Kind::Patch1, 0usize), (Kind::Patch2, 1)] {
-        let count = st.patches[pool].len;
-        for i in 0..count {
+        // Within a round a checked patch's answer does not change (its shadow measure, the
+        // threshold and whether it can split are fixed): only patches prepared since the
+        // last pass are new to it.
+        let count = st.prepared[pool].min(st.patches[pool].len);
+        let first = st.shadow_checked[pool].min(count);
+        st.shadow_checked[pool] = count;
+        for i in first..count {
             let e = Elem::new(kind, i);
             let p = st.patch(ws, e);
             if p.first_child != NONE || p.unprepared() || p.shadow <= threshold {

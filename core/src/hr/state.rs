@@ -48,6 +48,17 @@ pub(crate) struct State {
     pub sees_backs: bool,
     /// The contraction ratio of the last solution's iterations (infinite until known).
     pub contraction: f32,
+    /// Patches of each pool below these indices are prepared (see `direct`): new patches
+    /// only ever come at the end of their pool.
+    pub prepared: [u32; 2],
+    /// Links waiting for evaluation lie in `pending.0..pending.1` (empty when start >= end).
+    pub pending: (u32, u32),
+    /// Per kind of receiver (clusters, one-sided, two-sided patches), the index range that
+    /// may hold links no refinement pass has examined yet (see `refine`).
+    pub touched: [(u32, u32); 3],
+    /// Per patch pool, the patches below this index were checked for shadow edges in this
+    /// round (see `refine`).
+    pub shadow_checked: [u32; 2],
     /// The scene's box (m).
     pub scene_min: Vec3,
     pub scene_max: Vec3,
