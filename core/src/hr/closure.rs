@@ -36,9 +36,9 @@ pub(crate) fn update<E: Executor>(
         return;
     }
     progress.report("closing (patches)", 0, 0);
-    super::oriented::update_bins(st, ws, true);
+    super::bins::update(st, ws, true);
     super::solve::gather(st, ws, ex, true, true);
-    super::oriented::update_bins(st, ws, false);
+    super::bins::update(st, ws, false);
     super::solve::push(st, ws);
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;

@@ -46,7 +46,7 @@ pub(crate) struct Strides {
     pub link: usize,
     /// Coefficients per link: 1 without two-sided materials, 4 with.
     pub link_k: usize,
-    /// A large cluster's emission bins (see `oriented::update_bins`).
+    /// A large cluster's emission bins (see `bins`).
     pub bins: usize,
 }
 
@@ -67,7 +67,7 @@ impl Strides {
             source: core::mem::size_of::<Source>() + 4 * bands,
             link: core::mem::size_of::<Link>() + 4 * link_k + 4 * bands,
             link_k,
-            bins: 4 * super::oriented::bin_floats(bands),
+            bins: 4 * super::bins::bin_floats(bands),
         }
     }
 

@@ -17,6 +17,7 @@
 //! applied in order, so results are bit-identical for any number of threads.
 
 mod balance;
+mod bins;
 mod census;
 mod closure;
 mod cluster_kernel;
@@ -442,135 +443,288 @@ where
     E: Executor,
     P: Progress,
 {
-    settings.check()?;
-    let total = workspace.len();
-    let ws = aligned(workspace);
-    // Count the scene with the workspace itself as scratch, then lay it out.
-    let need = census_scratch_bytes(view);
-    if ws.len() < need {
-        return Err(HrError::WorkspaceTooSmall {
-            needed: need as u64,
-        }
-        .into());
+    let mut run = Run::start(view, settings, workspace, visibility, executor, progress)?;
+    run.rounds(progress);
+    run.finish(progress, sink)
+}
+
+/// A solve under way: the state, the workspace's main part, visibility, and the executor
+/// with the workspace's scratch.
+struct Run<'w, V: ?Sized, E: Executor> {
+    st: state::State,
+    ws: &'w mut [u8],
+    vis: vis::Vis<'w, V>,
+    seq: exec::Fallback<'w, E>,
+}
+
+/// The workspace's parts for a layout: the main part, the core BVH's bytes, the executor's
+/// scratch.
+type Parts<'w> = (&'w mut [u8], &'w mut [u8], &'w mut [f32]);
+
+fn parts<'w>(lay: &Layout, ws: &'w mut [u8], min_bytes: u64) -> Result<Parts<'w>, HrError> {
+    let too_small = HrError::WorkspaceTooSmall { needed: min_bytes };
+    if ws.len() < lay.main_bytes + lay.bvh_bytes + lay.scratch_floats * 4 {
+        return Err(too_small);
     }
-    let c = census(view, settings.max_children, &mut ws[..need])?;
-    if c.polygons() == 0 {
-        return Err(HrError::Empty.into());
-    }
-    let internal = visibility.is_none();
-    let plan = plan_from(view, settings, internal, &c)?;
-    let info = view.info();
-    let lay = Layout::new(
-        &c,
-        info.materials,
-        sources(view),
-        info.bands as usize,
-        settings,
-        internal,
-        ws.len(),
-    )
-    .ok_or(HrError::WorkspaceTooSmall {
-        needed: plan.min_bytes,
-    })?;
-    let (ws, rest) = ws.split_at_mut(lay.main_bytes);
+    let (main, rest) = ws.split_at_mut(lay.main_bytes);
     let (bvh_bytes, scratch_bytes) = rest.split_at_mut(lay.bvh_bytes);
-    let scratch: &mut [f32] = bytemuck::try_cast_slice_mut(
-        &mut scratch_bytes[..lay.scratch_floats * 4],
-    )
-    .map_err(|_| HrError::WorkspaceTooSmall {
-        needed: plan.min_bytes,
-    })?;
-    let mut st = load::load(view, settings, &c, lay, ws).map_err(|e| match e {
-        HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
-            needed: plan.min_bytes,
-        },
-        e => e,
-    })?;
-    let vis = match visibility {
-        Some(v) => vis::Vis::External(v),
-        None => {
-            let n = st.polygons as usize;
-            let (nodes, order) = bvh_bytes.split_at_mut(
-                crate::bvh::nodes_needed(st.polygons) * core::mem::size_of::<crate::bvh::BvhNode>(),
-            );
-            let nodes: &mut [crate::bvh::BvhNode] =
-                bytemuck::try_cast_slice_mut(nodes).map_err(|_| HrError::SceneTooLarge)?;
-            let order: &mut [u32] = bytemuck::try_cast_slice_mut(&mut order[..4 * n])
-                .map_err(|_| HrError::SceneTooLarge)?;
-            let polys = vis::WsPolygons { st: &st, ws };
-            let bvh = crate::bvh::build(
-                st.polygons,
-                |id| crate::bvh::PolygonSet::bounds(&polys, id),
-                nodes,
-                order,
-            )
-            .map_err(|e| match e {
-                crate::bvh::BvhError::InvalidBounds { primitive } => HrError::BadGeometry {
-                    polygon: primitive as u64,
-                },
-                _ => HrError::SceneTooLarge,
-            })?;
-            vis::Vis::Internal(bvh)
+    let scratch: &mut [f32] =
+        bytemuck::try_cast_slice_mut(&mut scratch_bytes[..lay.scratch_floats * 4])
+            .map_err(|_| too_small)?;
+    Ok((main, bvh_bytes, scratch))
+}
+
+impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
+    /// Counts, lays out and loads the scene, builds the core's BVH when no visibility is
+    /// given, lights every patch, and evaluates the first links.
+    fn start<S: SceneSource, P: Progress>(
+        view: &SceneView<S>,
+        settings: &Settings,
+        workspace: &'w mut [u8],
+        visibility: Option<&'w V>,
+        executor: &'w mut E,
+        progress: &mut P,
+    ) -> Result<Self, HrError> {
+        settings.check()?;
+        let total = workspace.len();
+        let ws = aligned(workspace);
+        // Count the scene with the workspace itself as scratch, then lay it out.
+        let need = census_scratch_bytes(view);
+        if ws.len() < need {
+            return Err(HrError::WorkspaceTooSmall {
+                needed: need as u64,
+            });
         }
-    };
-    st.stats.workspace_bytes = total as u64;
-    oriented::allocate_bins(&mut st, ws);
-    progress.report("loaded (polygons)", st.polygons as u64, st.polygons as u64);
-    let mut seq = exec::Fallback {
-        inner: executor,
-        scratch,
-    };
-    direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
-    direct::test_closed(&mut st, ws, &vis);
-    if let Some(band) = direct::no_steady_state(&st, ws) {
-        return Err(HrError::NoSteadyState { band: band as u32 }.into());
+        let c = census(view, settings.max_children, &mut ws[..need])?;
+        if c.polygons() == 0 {
+            return Err(HrError::Empty);
+        }
+        let internal = visibility.is_none();
+        let plan = plan_from(view, settings, internal, &c)?;
+        let info = view.info();
+        let lay = Layout::new(
+            &c,
+            info.materials,
+            sources(view),
+            info.bands as usize,
+            settings,
+            internal,
+            ws.len(),
+        )
+        .ok_or(HrError::WorkspaceTooSmall {
+            needed: plan.min_bytes,
+        })?;
+        let (ws, bvh_bytes, scratch) = parts(&lay, ws, plan.min_bytes)?;
+        let mut st = load::load(view, settings, &c, lay, ws).map_err(|e| match e {
+            HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
+                needed: plan.min_bytes,
+            },
+            e => e,
+        })?;
+        let vis = match visibility {
+            Some(v) => vis::Vis::External(v),
+            None => {
+                let n = st.polygons as usize;
+                let (nodes, order) = bvh_bytes.split_at_mut(
+                    crate::bvh::nodes_needed(st.polygons)
+                        * core::mem::size_of::<crate::bvh::BvhNode>(),
+                );
+                let nodes: &mut [crate::bvh::BvhNode] =
+                    bytemuck::try_cast_slice_mut(nodes).map_err(|_| HrError::SceneTooLarge)?;
+                let order: &mut [u32] = bytemuck::try_cast_slice_mut(&mut order[..4 * n])
+                    .map_err(|_| HrError::SceneTooLarge)?;
+                let polys = vis::WsPolygons { st: &st, ws };
+                let bvh = crate::bvh::build(
+                    st.polygons,
+                    |id| crate::bvh::PolygonSet::bounds(&polys, id),
+                    nodes,
+                    order,
+                )
+                .map_err(|e| match e {
+                    crate::bvh::BvhError::InvalidBounds { primitive } => HrError::BadGeometry {
+                        polygon: primitive as u64,
+                    },
+                    _ => HrError::SceneTooLarge,
+                })?;
+                vis::Vis::Internal(bvh)
+            }
+        };
+        st.stats.workspace_bytes = total as u64;
+        bins::allocate(&mut st, ws);
+        progress.report("loaded (polygons)", st.polygons as u64, st.polygons as u64);
+        let mut seq = exec::Fallback {
+            inner: executor,
+            scratch,
+        };
+        direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+        direct::test_closed(&mut st, ws, &vis);
+        if let Some(band) = direct::no_steady_state(&st, ws) {
+            return Err(HrError::NoSteadyState { band: band as u32 });
+        }
+        solve::pull(&st, ws);
+        st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
+        refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
+        Ok(Run { st, ws, vis, seq })
     }
-    solve::pull(&st, ws);
-    st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
-    refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
-    // While refinement goes on, each solution only guides the next refinement: it is taken
-    // to a looser tolerance; the last one (nothing left to refine) to the one asked for.
-    let loose = settings.tolerance.max(LOOSE_TOLERANCE);
-    let mut final_tolerance = false;
-    for round in 0..settings.max_rounds {
+
+    /// Refinement round `round`: refine until stable, close, solve (to the loose tolerance
+    /// unless nothing was refined or it is the last round allowed). Returns whether the
+    /// rounds are over.
+    fn round<P: Progress>(&mut self, round: u32, progress: &mut P) -> bool {
+        let settings = self.st.settings;
+        let (st, ws) = (&mut self.st, &mut *self.ws);
         st.stats.rounds = round + 1;
-        let refined = refine::refine_until_stable(&mut st, ws, &vis, &mut seq, progress);
-        closure::update(&mut st, ws, &mut seq, progress);
+        let refined = refine::refine_until_stable(st, ws, &self.vis, &mut self.seq, progress);
+        closure::update(st, ws, &mut self.seq, progress);
         let last = !refined && round > 0;
-        final_tolerance = last || round + 1 == settings.max_rounds;
+        let final_tolerance = last || round + 1 == settings.max_rounds;
+        // While refinement goes on, each solution only guides the next refinement: it is
+        // taken to a looser tolerance; the last one to the one asked for.
         let tol = if final_tolerance {
             settings.tolerance
         } else {
-            loose
+            settings.tolerance.max(LOOSE_TOLERANCE)
         };
-        solve::iterate(&mut st, ws, &mut seq, progress, tol);
+        solve::iterate(st, ws, &mut self.seq, progress, tol);
         if st.stats.diverged {
-            break;
+            return true;
         }
-        st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
+        st.power = solve::flow(st, ws).max(f32::MIN_POSITIVE);
         if last {
-            break;
+            return true;
         }
-        refine::clear_examined(&mut st, ws);
+        refine::clear_examined(st, ws);
+        if final_tolerance {
+            // Out of rounds while still refining: the solution meets the tolerance asked for
+            // all the same.
+            return true;
+        }
+        false
     }
-    if !final_tolerance && !st.stats.diverged {
-        solve::iterate(&mut st, ws, &mut seq, progress, settings.tolerance);
+
+    /// Every refinement round, until nothing refines or the rounds run out.
+    fn rounds<P: Progress>(&mut self, progress: &mut P) {
+        if self.st.settings.max_rounds == 0 {
+            // No refinement at all: the coarsest solution, to the tolerance asked for.
+            let tol = self.st.settings.tolerance;
+            solve::iterate(&mut self.st, self.ws, &mut self.seq, progress, tol);
+            return;
+        }
+        for round in 0..self.st.settings.max_rounds {
+            if self.round(round, progress) {
+                break;
+            }
+        }
     }
-    st.stats.links = st.links.live() as u64;
-    st.stats.clusters = st.clusters as u64;
-    st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
-    st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
-    st.stats.emitted_power = st.power;
-    for _ in 1..settings.final_passes {
-        st.stats.rays += final_gather::relight(&mut st, ws, &vis, &mut seq, progress);
+
+    /// The final passes: statistics, the relighting passes of the final gather, the power
+    /// balance, and every polygon to the sink.
+    fn finish<K: Sink, P: Progress>(
+        mut self,
+        progress: &mut P,
+        sink: &mut K,
+    ) -> Result<Stats, SolveError<K::Error>> {
+        let (st, ws) = (&mut self.st, &mut *self.ws);
+        st.stats.links = st.links.live() as u64;
+        st.stats.clusters = st.clusters as u64;
+        st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
+        st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
+        st.stats.emitted_power = st.power;
+        for _ in 1..st.settings.final_passes {
+            st.stats.rays += final_gather::relight(st, ws, &self.vis, &mut self.seq, progress);
+        }
+        let rays = 4 * st.settings.rays;
+        st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);
+        progress.report(output::phase(st, ws), 0, st.polygons as u64);
+        let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
+            .map_err(SolveError::Sink)?;
+        st.stats.rays += written.rays;
+        if let Some(absorbed) = written.absorbed {
+            st.stats.balance.absorbed = absorbed;
+        }
+        Ok(st.stats)
     }
-    st.stats.balance = balance::measure(&st, ws, &vis, &mut seq, 4 * settings.rays, progress);
-    progress.report(output::phase(&st, ws), 0, st.polygons as u64);
-    let written =
-        output::emit(&st, ws, &vis, &mut seq, progress, sink).map_err(SolveError::Sink)?;
-    st.stats.rays += written.rays;
-    if let Some(absorbed) = written.absorbed {
-        st.stats.balance.absorbed = absorbed;
+}
+
+/// Hooks for the benchmarks (`benches/hr.rs`): one phase of a solve at a time, from a state
+/// that can be copied with its workspace and run again. Not a stable interface.
+#[doc(hidden)]
+pub mod bench {
+    use super::*;
+
+    /// A solve stopped between phases (the workspace bytes hold the rest).
+    #[derive(Clone, Debug)]
+    pub struct Snapshot(state::State);
+
+    fn resume<'w, V: Visibility + ?Sized, E: Executor>(
+        snap: &Snapshot,
+        workspace: &'w mut [u8],
+        vis: &'w V,
+        executor: &'w mut E,
+    ) -> Run<'w, V, E> {
+        let ws = aligned(workspace);
+        let (ws, _, scratch) = parts(&snap.0.lay, ws, 0).expect("the workspace of the snapshot");
+        Run {
+            st: snap.0.clone(),
+            ws,
+            vis: vis::Vis::External(vis),
+            seq: exec::Fallback {
+                inner: executor,
+                scratch,
+            },
+        }
     }
-    Ok(st.stats)
+
+    /// Loads and lights the scene and evaluates its first links.
+    pub fn start<S: SceneSource, V: Visibility + ?Sized, E: Executor>(
+        view: &SceneView<S>,
+        settings: &Settings,
+        workspace: &mut [u8],
+        vis: &V,
+        executor: &mut E,
+    ) -> Result<Snapshot, HrError> {
+        let run = Run::start(
+            view,
+            settings,
+            workspace,
+            Some(vis),
+            executor,
+            &mut NoProgress,
+        )?;
+        Ok(Snapshot(run.st))
+    }
+
+    /// One refinement round (refinement passes until stable, closure, solution); returns
+    /// whether the rounds are over.
+    pub fn round<V: Visibility + ?Sized, E: Executor>(
+        snap: &mut Snapshot,
+        workspace: &mut [u8],
+        vis: &V,
+        executor: &mut E,
+    ) -> bool {
+        let mut run = resume(snap, workspace, vis, executor);
+        let round = run.st.stats.rounds;
+        let over = run.round(round, &mut NoProgress);
+        snap.0 = run.st;
+        over
+    }
+
+    /// One iteration of the solution: gather, push, pull.
+    pub fn gather<V: Visibility + ?Sized, E: Executor>(
+        snap: &mut Snapshot,
+        workspace: &mut [u8],
+        vis: &V,
+        executor: &mut E,
+    ) {
+        let mut run = resume(snap, workspace, vis, executor);
+        solve::gather(&mut run.st, run.ws, &mut run.seq, false, false);
+        solve::push(&run.st, run.ws);
+        solve::pull(&run.st, run.ws);
+        snap.0 = run.st;
+    }
+
+    /// Links alive.
+    pub fn links(snap: &Snapshot) -> u64 {
+        snap.0.links.live() as u64
+    }
 }

@@ -84,7 +84,7 @@ pub(crate) struct Cluster {
     /// First of its polygons in the cluster-order array (a cluster's polygons are
     /// consecutive there).
     pub first_polygon: u32,
-    /// Its emission bins (see `oriented::update_bins`) in the bins pool, or NONE.
+    /// Its emission bins (see `bins`) in the bins pool, or NONE.
     pub bins: u32,
 }
 

@@ -491,7 +491,7 @@ fn pull_from(st: &State, ws: &mut [u8], extrapolate: f32, leaves_done: bool) -> 
             *d = p * inv;
         }
     }
-    super::oriented::update_bins(st, ws, false);
+    super::bins::update(st, ws, false);
     (change, b_max)
 }
 

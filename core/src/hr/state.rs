@@ -18,7 +18,7 @@ pub(crate) struct State {
     /// One-sided and two-sided patches.
     pub patches: [Pool; 2],
     pub links: Pool,
-    /// Emission bins of large clusters (see `oriented::update_bins`).
+    /// Emission bins of large clusters (see `bins`).
     pub bins: Pool,
     pub settings: Settings,
     pub bands: usize,

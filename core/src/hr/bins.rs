@@ -1,0 +1,400 @@
+//! Emission bins: what a large cluster radiates towards any direction, in a few floats.
+//!
+//! Towards a unit direction `w` a cluster radiates `sum_p P_p max(0, n_p . w) / pi` over its
+//! polygons' emitting sides (outward normal `n_p`, power `P_p`, W per band; see
+//! `oriented::emission`). Summed polygon by polygon for every link and every iteration, that
+//! was most of a solve in a tree of 100,000 leaves (34 million terms per iteration on the
+//! paper poplar). Binned by normal instead, each of [`BINS`] bins keeps `V = sum P n` and
+//! `S = sum P` per band, and:
+//! * a bin whose every normal faces `w` gives `V . w`, exactly;
+//! * a bin whose every normal faces away gives nothing, exactly;
+//! * a bin the terminator crosses is taken as a uniform cone of normals of collimation
+//!   `|V| / S` about `V`: the mean of `max(0, n . w)` over such a cone is the irradiance of
+//!   a plane facing `w` under a uniform spherical cap of light ([`cap_mean`], exact; the
+//!   same integral with normals and light exchanged).
+//!
+//! On crowns of leaves facing every way and on soil-like clusters (tests) the binned
+//! emission stays within 1.3% of the largest emission over all directions of the exact sum.
+//! Bins add up, so a cluster's bins are its children's plus its own polygons', one pass up
+//! the tree per iteration.
+
+use super::cone::cone_share;
+use super::ids::{Elem, Kind};
+use super::state::State;
+use crate::limits::NONE;
+use glam::Vec3;
+
+/// Directions by which emitting sides are binned: a cube's 6 faces, 12 edges and 8 corners.
+pub(crate) const BINS: usize = 26;
+
+/// Clusters of more polygons than this keep emission bins; smaller ones sum their polygons
+/// (as cheap, and exact).
+pub(crate) const BINNED: u32 = 32;
+
+/// Floats of a cluster's bins: per bin and band, `V` (3) and `S` (1).
+pub(crate) const fn bin_floats(bands: usize) -> usize {
+    BINS * bands * 4
+}
+
+/// The sine of the largest angle between a normal and the centre of its bin (32.74
+/// degrees, at the corners of a face bin): a direction within 90 degrees less that of a
+/// bin's centre is faced by every normal of the bin, one beyond 90 degrees more by none.
+const SPREAD: f32 = 0.541;
+
+/// The bin of a unit normal: each coordinate rounded to -1, 0 or 1 at +-sin 22.5 degrees
+/// (no unit vector rounds to 0, 0, 0).
+pub(crate) fn bin_of(n: Vec3) -> usize {
+    const T: f32 = 0.382_683_43;
+    let q = |x: f32| {
+        if x > T {
+            2
+        } else if x < -T {
+            0
+        } else {
+            1
+        }
+    };
+    let i = q(n.x) * 9 + q(n.y) * 3 + q(n.z);
+    match i {
+        // Not a unit vector (a checked polygon's normal is): along its largest axis.
+        13 => {
+            let a = n.abs();
+            let axis = if a.x >= a.y && a.x >= a.z {
+                0
+            } else if a.y >= a.z {
+                1
+            } else {
+                2
+            };
+            let mut d = [1usize; 3];
+            d[axis] = if n[axis] >= 0.0 { 2 } else { 0 };
+            let i = d[0] * 9 + d[1] * 3 + d[2];
+            if i > 13 { i - 1 } else { i }
+        }
+        i if i > 13 => i - 1,
+        i => i,
+    }
+}
+
+/// The unit direction at the centre of `bin` (see [`bin_of`]).
+pub(crate) fn bin_centre(bin: usize) -> Vec3 {
+    let i = if bin >= 13 { bin + 1 } else { bin } as i32;
+    let d = Vec3::new(
+        (i / 9 - 1) as f32,
+        ((i / 3) % 3 - 1) as f32,
+        (i % 3 - 1) as f32,
+    );
+    let k = d.x.abs() + d.y.abs() + d.z.abs();
+    d * if k >= 3.0 {
+        0.577_350_26
+    } else if k >= 2.0 {
+        core::f32::consts::FRAC_1_SQRT_2
+    } else {
+        1.0
+    }
+}
+
+/// Adds an emitting side (outward unit normal `d`, power per band `power`, W) to `bins`.
+pub(crate) fn add(bins: &mut [f32], bands: usize, d: Vec3, power: &[f32]) {
+    let at = bin_of(d) * bands * 4;
+    for (k, &p) in power.iter().enumerate().take(bands) {
+        if p > 0.0 {
+            let a = &mut bins[at + 4 * k..at + 4 * k + 4];
+            a[0] += p * d.x;
+            a[1] += p * d.y;
+            a[2] += p * d.z;
+            a[3] += p;
+        }
+    }
+}
+
+/// `sum_p P_p max(0, n_p . w)` per band from `bins`, added to `out` (W; the caller scales).
+pub(crate) fn emission(bins: &[f32], bands: usize, w: Vec3, out: &mut [f32]) {
+    for bin in 0..BINS {
+        let cw = bin_centre(bin).dot(w);
+        if cw <= -SPREAD {
+            continue;
+        }
+        for (k, o) in out.iter_mut().enumerate().take(bands) {
+            let a = &bins[(bin * bands + k) * 4..(bin * bands + k) * 4 + 4];
+            let s = a[3];
+            if s <= 0.0 {
+                continue;
+            }
+            let v = Vec3::new(a[0], a[1], a[2]);
+            let vw = v.dot(w);
+            let len = v.length();
+            *o += if cw >= SPREAD {
+                vw
+            } else if len > 0.0 {
+                s * cap_mean(len / s, vw / len)
+            } else {
+                0.25 * s
+            };
+        }
+    }
+}
+
+/// The mean of `max(0, n . w)` over unit vectors `n` spread uniformly (by solid angle) over
+/// a cone of collimation `c` (mean length of the vectors: half-angle `acos(2c - 1)`) whose
+/// axis makes cosine `t` with `w`. For cones of at most 90 degrees (`c >= 1/2`, as every
+/// bin's) this is the irradiance of a uniform spherical cap on a tilted plane, in closed
+/// form (Snyder 1996, as in Lagarde's "Moving Frostbite to PBR", 4.7.2), over the cap's
+/// solid angle; wider cones take the integrated table [`cone_share`].
+pub(crate) fn cap_mean(c: f32, t: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0) as f64;
+    let t = t.clamp(-1.0, 1.0) as f64;
+    if c < 0.5 {
+        return cone_share(c as f32, t as f32);
+    }
+    let cos_a = 2.0 * c - 1.0;
+    let sin2 = 1.0 - cos_a * cos_a;
+    if sin2 <= 1e-12 || t * t >= sin2 {
+        // A beam, or a cone wholly on one side of the plane.
+        return (c * t.max(0.0)) as f32;
+    }
+    let sin_t = libm::sqrt(1.0 - t * t);
+    let x = cos_a / libm::sqrt(sin2);
+    let y = (-x * t / sin_t).clamp(-1.0, 1.0);
+    let sy = sin_t * libm::sqrt(1.0 - y * y);
+    let e = (t * libm::acos(y) - x * sy) * sin2 + libm::atan(sy / x);
+    let solid_angle = 2.0 * core::f64::consts::PI * (1.0 - cos_a);
+    (e.max(0.0) / solid_angle) as f32
+}
+
+/// Gives every cluster of more than [`BINNED`] polygons its bins, while the workspace has
+/// room (a cluster without them sums its polygons: slower, and exact).
+pub(crate) fn allocate(st: &mut State, ws: &mut [u8]) {
+    for i in 0..st.clusters {
+        let mut c = st.cluster(ws, i);
+        if c.polygons <= BINNED {
+            continue;
+        }
+        let mut blocks = st.blocks;
+        let Some(k) = st.bins.alloc_run(ws, &mut blocks, 1) else {
+            return;
+        };
+        st.blocks = blocks;
+        c.bins = k;
+        st.set_cluster(ws, i, &c);
+    }
+}
+
+/// Recomputes the bins of every cluster that has them from its polygons' powers (with
+/// `unit`, their exposed areas: every emitting side at radiosity 1, see `closure`).
+/// Children come after their parents in cluster order, so one reverse pass adds each
+/// child's bins to its parent's.
+pub(crate) fn update(st: &State, ws: &mut [u8], unit: bool) {
+    let nb = st.bands;
+    let len = bin_floats(nb);
+    let mut acc = [0.0f32; BINS * crate::limits::MAX_BANDS * 4];
+    for i in (0..st.clusters).rev() {
+        let c = st.cluster(ws, i);
+        if c.bins == NONE {
+            continue;
+        }
+        acc[..len].fill(0.0);
+        for k in 0..c.child_count {
+            let child = st.child(ws, c.children + k);
+            match child.kind() {
+                Kind::Cluster => {
+                    let cc = st.cluster(ws, child.index());
+                    if cc.bins != NONE {
+                        for (a, v) in acc[..len].iter_mut().zip(of(st, ws, cc.bins)) {
+                            *a += v;
+                        }
+                    } else {
+                        for j in cc.first_polygon..cc.first_polygon + cc.polygons {
+                            add_polygon(st, ws, st.ordered(ws, j), unit, &mut acc[..len]);
+                        }
+                    }
+                }
+                _ => {
+                    let poly = st.patch(ws, child).poly;
+                    add_polygon(st, ws, poly, unit, &mut acc[..len]);
+                }
+            }
+        }
+        let at = st.bins.at(ws, &st.blocks, c.bins);
+        super::pool::floats_mut(ws, at, len).copy_from_slice(&acc[..len]);
+    }
+}
+
+/// The bins stored at record `k` of the bins pool.
+pub(crate) fn of<'a>(st: &State, ws: &'a [u8], k: u32) -> &'a [f32] {
+    let at = st.bins.at(ws, &st.blocks, k);
+    super::pool::floats(ws, at, bin_floats(st.bands))
+}
+
+/// Adds polygon `poly`'s emitting sides to `acc`.
+fn add_polygon(st: &State, ws: &[u8], poly: u32, unit: bool, acc: &mut [f32]) {
+    let nb = st.bands;
+    let rec = st.polygon(ws, poly);
+    let n = Vec3::from(rec.normal);
+    let root = Elem(rec.root);
+    let sides = State::sides(root);
+    let mut seen = [0.0f32; crate::limits::MAX_BANDS];
+    if unit {
+        let p = st.patch(ws, root);
+        seen[..nb].fill(p.area * p.exposed);
+    }
+    for side in 0..2 {
+        let d = if side == 0 { n } else { -n };
+        let power = if !unit {
+            st.polygon_power(ws, poly, side)
+        } else if side < sides {
+            &seen[..nb]
+        } else {
+            continue;
+        };
+        add(acc, nb, d, power);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::sampling::{hash3, unit2};
+    use std::vec::Vec;
+
+    fn unit(h: u32) -> Vec3 {
+        let (a, b) = unit2(h);
+        let z = 2.0 * a - 1.0;
+        let r = libm::sqrtf((1.0 - z * z).max(0.0));
+        let phi = core::f32::consts::TAU * b;
+        Vec3::new(r * libm::cosf(phi), r * libm::sinf(phi), z)
+    }
+
+    /// The polygon-by-polygon sum the bins stand for.
+    fn exact(sides: &[(Vec3, [f32; 2])], w: Vec3) -> [f32; 2] {
+        let mut out = [0.0f32; 2];
+        for (n, p) in sides {
+            let c = n.dot(w).max(0.0);
+            out[0] += c * p[0];
+            out[1] += c * p[1];
+        }
+        out
+    }
+
+    fn binned(sides: &[(Vec3, [f32; 2])], w: Vec3) -> [f32; 2] {
+        let mut bins = [0.0f32; BINS * 2 * 4];
+        for (n, p) in sides {
+            add(&mut bins, 2, *n, p);
+        }
+        let mut out = [0.0f32; 2];
+        emission(&bins, 2, w, &mut out);
+        out
+    }
+
+    #[test]
+    fn every_unit_vector_has_a_bin_within_the_spread_of_its_centre() {
+        let mut seen = [false; BINS];
+        for i in 0..200_000 {
+            let n = unit(hash3(i, 1, 2));
+            let b = bin_of(n);
+            seen[b] = true;
+            assert!(
+                bin_centre(b).dot(n) >= libm::sqrtf(1.0 - SPREAD * SPREAD) - 1e-4,
+                "{n:?} in bin {b}"
+            );
+        }
+        assert!(seen.iter().all(|&s| s), "every bin is used");
+        // The six axes, and a vector too short to be a normal.
+        for (n, axis) in [
+            (Vec3::X, Vec3::X),
+            (-Vec3::X, -Vec3::X),
+            (Vec3::Y, Vec3::Y),
+            (-Vec3::Y, -Vec3::Y),
+            (Vec3::Z, Vec3::Z),
+            (-Vec3::Z, -Vec3::Z),
+            (Vec3::new(0.0, -0.1, 0.05), -Vec3::Y),
+        ] {
+            assert_eq!(bin_centre(bin_of(n)), axis, "{n:?}");
+        }
+    }
+
+    #[test]
+    fn the_cap_mean_is_the_mean_over_the_cone() {
+        // Monte Carlo over uniform cones (a million vectors each) against the closed form.
+        for (c, seed) in [(0.5f32, 1u32), (0.75, 2), (0.95, 3), (0.999, 4)] {
+            let cos_a = 2.0 * c - 1.0;
+            let axis = Vec3::Z;
+            for t in [-0.9f32, -0.3, -0.05, 0.0, 0.02, 0.2, 0.6, 1.0] {
+                let w = Vec3::new(libm::sqrtf(1.0 - t * t), 0.0, t);
+                let n = 1_000_000u32;
+                let mut sum = 0.0f64;
+                for i in 0..n {
+                    let (a, b) = unit2(hash3(i, seed, 11));
+                    let z = 1.0 - a * (1.0 - cos_a);
+                    let r = libm::sqrtf((1.0 - z * z).max(0.0));
+                    let phi = core::f32::consts::TAU * b;
+                    let v = Vec3::new(r * libm::cosf(phi), r * libm::sinf(phi), z);
+                    sum += v.dot(w).max(0.0) as f64;
+                }
+                let mc = (sum / n as f64) as f32;
+                let _ = axis;
+                assert!(
+                    (cap_mean(c, t) - mc).abs() < 2e-3 * c.max(0.05),
+                    "c {c} t {t}: {} vs {mc}",
+                    cap_mean(c, t)
+                );
+            }
+        }
+        // The collimation's own identity: F(c, t) - F(c, -t) = c t.
+        for c in [0.5f32, 0.7, 0.9, 0.99] {
+            for t in [0.0f32, 0.1, 0.3, 0.7] {
+                let d = cap_mean(c, t) - cap_mean(c, -t);
+                assert!((d - c * t).abs() < 1e-5, "c {c} t {t}: {d}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_orientation_is_exact_in_every_direction() {
+        // A flat soil cluster: every polygon faces the same way (one bin, collimation 1).
+        let n = Vec3::new(0.3, 0.2, 0.93).normalize();
+        let sides: Vec<_> = (0..50).map(|i| (n, [1.0 + i as f32, 2.0])).collect();
+        for i in 0..2000 {
+            let w = unit(hash3(i, 7, 7));
+            let (e, b) = (exact(&sides, w), binned(&sides, w));
+            for k in 0..2 {
+                let total: f32 = sides.iter().map(|s| s.1[k]).sum();
+                assert!((e[k] - b[k]).abs() <= 1e-3 * total, "{w:?}: {e:?} vs {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn leaves_facing_every_way_are_within_a_few_percent() {
+        // A crown of leaves (two-sided: both sides emit, with different powers), and a
+        // soil-like cluster of normals within 20 degrees of up: the binned emission against
+        // the exact sum, relative to the largest emission over all directions.
+        for (spread, seed) in [(1.0f32, 1u32), (0.06, 2), (0.3, 3), (0.01, 4)] {
+            let sides: Vec<_> = (0..3000u32)
+                .flat_map(|i| {
+                    let mut n = unit(hash3(i, seed, 3));
+                    if spread < 1.0 {
+                        n = (Vec3::Z + n * libm::sqrtf(spread)).normalize();
+                    }
+                    let (a, b) = unit2(hash3(i, seed, 4));
+                    [(n, [a, 0.5 * a]), (-n, [0.3 * b, b])]
+                })
+                .collect();
+            let dirs: Vec<Vec3> = (0..4000).map(|i| unit(hash3(i, seed, 9))).collect();
+            let peak = dirs
+                .iter()
+                .map(|&w| exact(&sides, w)[0].max(exact(&sides, w)[1]))
+                .fold(0.0f32, f32::max);
+            let mut worst = 0.0f32;
+            for &w in &dirs {
+                let (e, b) = (exact(&sides, w), binned(&sides, w));
+                for k in 0..2 {
+                    worst = worst.max((e[k] - b[k]).abs() / peak);
+                }
+            }
+            std::eprintln!("spread {spread}: worst {worst}");
+            assert!(worst < 0.015, "spread {spread}: worst {worst}");
+        }
+    }
+}
