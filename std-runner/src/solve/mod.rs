@@ -147,7 +147,7 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     // pages, which the system hands out lazily: only what the solver uses becomes resident.
     // Only for sizes where an abort is possible at all: freeing a probe below glibc's
     // largest mmap threshold (32 MiB) raises the threshold, and the zeroed workspace then
-    // comes from the heap and is cleared byte by byte (a fifth of a small solve's time).
+    // comes from the heap and is cleared byte by byte (4% of a Cornell solve's instructions).
     if size > PROBE_ABOVE {
         let mut probe: Vec<u8> = Vec::new();
         probe
