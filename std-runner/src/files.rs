@@ -59,6 +59,7 @@ pub struct FileSource {
 impl FileSource {
     /// Opens a `.hirb` file.
     pub fn open(path: &Path) -> Result<Self> {
+        not_a_directory(path)?;
         let file = File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
         let len = file
             .metadata()
@@ -117,8 +118,13 @@ pub struct Loaded {
     pub scene: Scene,
     /// The format it came from.
     pub format: Format,
-    /// Loader warnings, already prefixed with the file.
+    /// Loader warnings, already prefixed with the file (at most `obj::MAX_WARNINGS` and a
+    /// line counting the others).
     pub warnings: Vec<String>,
+    /// Every warning the loader made, shown or not.
+    pub warnings_total: u64,
+    /// Faces the loader skipped (degenerate or too small for single precision; OBJ only).
+    pub skipped_faces: u64,
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -129,7 +135,9 @@ fn read(path: &Path) -> Result<Vec<u8>> {
 /// column (text) or byte offset (binary) of the fault.
 pub fn load_scene(path: &Path) -> Result<Loaded> {
     let format = Format::of(path)?;
+    not_a_directory(path)?;
     let mut warnings = Vec::new();
+    let (mut warnings_total, mut skipped_faces) = (0, 0);
     let scene = match format {
         Format::Text => {
             let bytes = read(path)?;
@@ -153,6 +161,8 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
             for w in imported.warnings {
                 warnings.push(format!("{}:{w}", path.display()));
             }
+            warnings_total = imported.warnings_total;
+            skipped_faces = imported.counts.skipped_faces;
             imported.scene
         }
     };
@@ -160,7 +170,17 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
         scene,
         format,
         warnings,
+        warnings_total,
+        skipped_faces,
     })
+}
+
+/// Refuses a directory given as a scene file (reading it failed with an OS error code).
+fn not_a_directory(path: &Path) -> Result<()> {
+    if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
+        bail!("{}: is a directory, not a scene file", path.display());
+    }
+    Ok(())
 }
 
 fn relocate(dir: &Path, e: &obj::ObjError) -> String {

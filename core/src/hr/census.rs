@@ -102,8 +102,13 @@ pub fn census<S: SceneSource>(
             two_sided[m as usize / 8] |= 1 << (m % 8);
         }
     }
-    let memo: &mut [Census] =
-        bytemuck::try_cast_slice_mut(memo_bytes).map_err(|_| HrError::ScratchTooSmall)?;
+    // No originals: nothing to remember (and an empty scratch may sit at any address, which
+    // a cast to an aligned type would refuse).
+    let memo: &mut [Census] = if memo_bytes.is_empty() {
+        &mut []
+    } else {
+        bytemuck::try_cast_slice_mut(memo_bytes).map_err(|_| HrError::ScratchTooSmall)?
+    };
     for k in 0..info.originals {
         let root = view.original(OriginalId(k))?.root;
         memo[k as usize] = tree(view, root, max_children, two_sided, memo)?;

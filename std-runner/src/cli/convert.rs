@@ -25,7 +25,7 @@ pub fn run(a: Args) -> Result<()> {
     let out_format = Format::of(&a.output)?;
     check_distinct(&a.scene, &a.output)?;
     let loaded = files::load_scene(&a.scene)?;
-    super::warn_all(&loaded.warnings, a.quiet);
+    super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     match out_format {
         Format::Text => {
             // Compiling checks the scene, so a .hir output always reads back.
@@ -39,7 +39,7 @@ pub fn run(a: Args) -> Result<()> {
         }
         Format::Obj => {
             let stats = write_obj(&a.scene, &loaded.scene, &a.output, a.quiet)?;
-            super::warn_all(&stats.warnings, a.quiet);
+            super::warn_all(&stats.warnings, stats.warnings.len() as u64, a.quiet);
         }
     }
     if !a.quiet {

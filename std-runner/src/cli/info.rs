@@ -68,7 +68,7 @@ pub fn run(a: Args) -> Result<()> {
         report(format, &files::open_image(&a.scene)?)?
     } else {
         let loaded = files::load_scene(&a.scene)?;
-        super::warn_all(&loaded.warnings, a.quiet);
+        super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
         let bytes = files::compile(&a.scene, &loaded.scene)?;
         let view = crate::scene::read_image(&bytes)
             .map_err(|e| anyhow::anyhow!("{}: {e}", a.scene.display()))?;
@@ -98,10 +98,14 @@ fn table(path: &std::path::Path, r: &Report) -> String {
         "materials         {} ({} two-sided, {} emitting)",
         r.materials, r.two_sided, r.emitting
     );
-    let _ = writeln!(s, "polygons          {}", i.expanded_polygons);
     let _ = writeln!(
         s,
-        "stored polygons   {} ({} vertices)",
+        "polygons          {} (every instance expanded: what solve lights)",
+        i.expanded_polygons
+    );
+    let _ = writeln!(
+        s,
+        "stored polygons   {} (in the file: each original once, plus the approximate instances' own), {} vertices",
         i.polygons, i.vertices
     );
     let _ = writeln!(s, "clusters          {}", i.clusters);

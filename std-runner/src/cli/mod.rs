@@ -64,17 +64,27 @@ pub fn print_out(text: &str) -> anyhow::Result<()> {
     }
 }
 
-/// Prints loader warnings to stderr.
-pub(crate) fn warn_all(warnings: &[String], quiet: bool) {
+/// Prints the first warnings to stderr, and how many more there were: `total` counts every
+/// warning made (a loader keeps only the first thousand in `warnings`).
+pub(crate) fn warn_all(warnings: &[String], total: u64, quiet: bool) {
     if quiet {
         return;
     }
     const SHOWN: usize = 20;
-    for w in warnings.iter().take(SHOWN) {
-        eprintln!("warning: {w}");
-    }
+    let total = total.max(warnings.len() as u64);
+    let shown = warnings.len().min(SHOWN);
     if warnings.len() > SHOWN {
-        eprintln!("warning: ... and {} more warnings", warnings.len() - SHOWN);
+        for w in &warnings[..shown] {
+            eprintln!("warning: {w}");
+        }
+        eprintln!(
+            "warning: ... and {} more warnings ({total} in all)",
+            total - shown as u64
+        );
+    } else {
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
     }
 }
 

@@ -159,14 +159,25 @@ pub fn run(a: Args) -> Result<()> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let loaded = files::load_scene(&a.scene)?;
-    super::warn_all(&loaded.warnings, a.quiet);
+    super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let y_up = loaded.format == files::Format::Obj;
-    let scene = loaded.scene;
+    let scene = &loaded.scene;
     let bytes = files::compile(&a.scene, &scene)?;
     let info = *crate::scene::read_image(&bytes)
         .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?
         .info();
     drop(bytes);
+    if info.expanded_polygons == 0 {
+        if loaded.skipped_faces > 0 {
+            bail!(
+                "{}: no usable polygons ({} face{} skipped: see the warnings)",
+                a.scene.display(),
+                loaded.skipped_faces,
+                if loaded.skipped_faces == 1 { "" } else { "s" }
+            );
+        }
+        bail!("{}: the scene has no polygons", a.scene.display());
+    }
     let bands = scene.bands as usize;
     let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
 

@@ -49,6 +49,11 @@ impl Warnings {
         }
     }
 
+    /// Every warning made, kept or not.
+    pub fn total(&self) -> u64 {
+        self.list.len() as u64 + self.dropped
+    }
+
     /// The warnings, with a last line counting those beyond [`MAX_WARNINGS`].
     pub fn finish(mut self) -> Vec<String> {
         if self.dropped > 0 {

@@ -90,6 +90,8 @@ pub struct ObjImport {
     /// Human-readable notes ("12:1: degenerate face skipped"), in file order; at most
     /// [`MAX_WARNINGS`] and a last line counting the others.
     pub warnings: Vec<String>,
+    /// Every warning made, shown in `warnings` or not.
+    pub warnings_total: u64,
     /// What the file held.
     pub counts: ObjCounts,
 }

@@ -100,6 +100,7 @@ pub(crate) fn read(
     }
     Ok(ObjImport {
         scene,
+        warnings_total: r.warnings.total(),
         warnings: r.warnings.finish(),
         counts: r.counts,
     })

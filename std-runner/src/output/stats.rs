@@ -191,7 +191,11 @@ impl SolveReport {
                 }
                 writeln!(out)
             }
-            None => writeln!(out, "  error: no reference given"),
+            // Not an error: nothing to compare with (a line starting "error:" means one).
+            None => writeln!(
+                out,
+                "  accuracy: not measured (--reference REF.csv compares with a results table)"
+            ),
         }?;
         if !self.power.is_empty() {
             writeln!(

@@ -1,0 +1,84 @@
+//! A new user's first hour (issue 9), through the `hirad` binary: pictures, messages, and
+//! outputs that are never lost or clobbered. One test (or more) per item of the issue.
+
+mod common;
+use common::{fails, fixture, hirad, ok, s};
+use std::path::Path;
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Item 2: a run that succeeded says no line that starts with "error:".
+#[test]
+fn a_successful_run_reports_no_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let results = dir.path().join("r.csv");
+    let out = hirad(&[
+        "solve",
+        s(&fixture("cornell_box.hir")),
+        "--results",
+        s(&results),
+    ]);
+    assert!(out.status.success());
+    let text =
+        String::from_utf8_lossy(&out.stderr).to_string() + &String::from_utf8_lossy(&out.stdout);
+    for line in text.lines() {
+        assert!(
+            !line.trim_start().starts_with("error"),
+            "a successful run printed {line:?}:\n{text}"
+        );
+    }
+}
+
+/// Item 6: messages that say what is wrong.
+#[test]
+fn messages_name_the_real_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    // A face-less OBJ, and one whose only face is degenerate.
+    let empty = write(dir.path(), "empty.obj", "v 0 0 0\nv 1 0 0\n");
+    let err = fails(&["solve", s(&empty)]);
+    assert!(
+        err.contains("has no polygons") && !err.contains("scratch"),
+        "{err}"
+    );
+    let degenerate = write(
+        dir.path(),
+        "flat.obj",
+        "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+    );
+    let err = fails(&["solve", s(&degenerate)]);
+    assert!(
+        err.contains("no usable polygons (1 face skipped") && !err.contains("scratch"),
+        "{err}"
+    );
+    // 10,000 skipped faces: the count of those not shown is right.
+    let mut text = String::from("v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\n");
+    for _ in 0..10_000 {
+        text.push_str("f 1 2 3\n");
+    }
+    text.push_str("f 1 2 4\n");
+    let many = write(dir.path(), "many.obj", &text);
+    let out = hirad(&["info", s(&many)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("... and 9980 more warnings (10000 in all)"),
+        "{err}"
+    );
+    // `info` says what its two polygon counts mean.
+    let info = ok(&["info", s(&fixture("chair_room.hir"))]);
+    assert!(info.contains("every instance expanded"), "{info}");
+    assert!(info.contains("in the file"), "{info}");
+    // A directory given as a scene.
+    let d = dir.path().join("scene.hirb");
+    std::fs::create_dir(&d).unwrap();
+    for cmd in ["info", "solve"] {
+        let err = fails(&[cmd, s(&d)]);
+        assert!(
+            err.contains("is a directory, not a scene file") && !err.contains("error code"),
+            "{cmd}: {err}"
+        );
+    }
+}
