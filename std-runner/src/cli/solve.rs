@@ -162,7 +162,7 @@ pub fn run(a: Args) -> Result<()> {
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let y_up = loaded.format == files::Format::Obj;
     let scene = &loaded.scene;
-    let bytes = files::compile(&a.scene, &scene)?;
+    let bytes = files::compile(&a.scene, scene)?;
     let info = *crate::scene::read_image(&bytes)
         .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?
         .info();
@@ -206,7 +206,7 @@ pub fn run(a: Args) -> Result<()> {
             None => match scene.cameras.first() {
                 Some(c) => c.clone(),
                 // OBJ files are y up by convention; hirad's own scenes default to z up.
-                None => output::default_camera_up(&output::scene_bounds(&scene), size, y_up)
+                None => output::default_camera_up(&output::scene_bounds(scene), size, y_up)
                     .map_err(|e| anyhow!("{e}"))?,
             },
         };
@@ -259,7 +259,7 @@ pub fn run(a: Args) -> Result<()> {
                 ..Settings::default()
             };
             let run = solve::solve_hr(
-                &scene,
+                scene,
                 &settings,
                 threads,
                 a.memory,
@@ -320,7 +320,7 @@ pub fn run(a: Args) -> Result<()> {
                 .build()?;
             progress.phase("exact solve", None);
             let r = pool
-                .install(|| exact::solve_exact_obvhs(&scene, &settings, &mut outputs))
+                .install(|| exact::solve_exact_obvhs(scene, &settings, &mut outputs))
                 .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?;
             progress.finish();
             report.elements = r.elements as u64;
