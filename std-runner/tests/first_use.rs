@@ -82,3 +82,79 @@ fn messages_name_the_real_problem() {
         );
     }
 }
+
+/// Item 5: absurd values are refused, or warned about, in the option's own words.
+#[test]
+fn absurd_values_get_a_clear_answer() {
+    let cornell = fixture("cornell_box.hir");
+    let scene = s(&cornell);
+    let dir = tempfile::tempdir().unwrap();
+    let err = |args: &[&str]| {
+        let out = hirad(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            matches!(out.status.code(), Some(1 | 2)),
+            "{args:?}: status {:?}",
+            out.status
+        );
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    // 100,000 threads aborted the process (status 134) setting up their stacks.
+    let e = err(&["solve", scene, "--threads", "100000", "-q"]);
+    assert!(e.contains("--threads") && e.contains("1..=1024"), "{e}");
+    // A negative value meets the option's own check, not clap's advice to write `-- -1`.
+    for (args, want) in [
+        (
+            vec!["solve", scene, "--epsilon", "-1"],
+            "--epsilon must be a positive number",
+        ),
+        (
+            vec!["solve", scene, "--tolerance", "-1e-3"],
+            "--tolerance must be a positive number",
+        ),
+        (
+            vec!["solve", scene, "--rays", "-3"],
+            "-3 is not in 1..=1024",
+        ),
+        (
+            vec!["solve", scene, "--threads", "-2"],
+            "-2 is not in 1..=1024",
+        ),
+        (
+            vec!["gen", "canopy", "--rows", "-1", "-o", "x.hirb"],
+            "-1 is not in",
+        ),
+    ] {
+        let e = err(&args);
+        assert!(e.contains(want) && !e.contains("-- -"), "{args:?}: {e}");
+    }
+    // --size names itself once.
+    let png = dir.path().join("x.png");
+    let e = err(&["solve", scene, "--size", "0x0", "--image", s(&png), "-q"]);
+    assert!(
+        e.contains("--size: width `0`") && !e.contains("--size: --size"),
+        "{e}"
+    );
+    assert!(!png.exists());
+    // Image options without --image, and an epsilon that refines nothing, are said.
+    let out = hirad(&[
+        "solve",
+        scene,
+        "--size",
+        "100x100",
+        "--camera",
+        "0.3,0.3,-1,0.3,0.3,0,0,1,0,40",
+        "--supersample",
+        "2",
+    ]);
+    let e = String::from_utf8_lossy(&out.stderr);
+    for name in ["--size", "--camera", "--supersample"] {
+        assert!(
+            e.contains(&format!("warning: {name} has no effect without --image")),
+            "{e}"
+        );
+    }
+    let out = hirad(&["solve", scene, "--epsilon", "1e9", "--max-imbalance", "100"]);
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains("nothing is refined"), "{e}");
+}

@@ -206,9 +206,22 @@ fn bad_options_are_refused() {
     let box_ = fixture("cornell_box.hir");
     assert!(fails(&["solve", s(&box_), "--epsilon", "0"]).contains("--epsilon"));
     assert!(fails(&["solve", s(&box_), "--epsilon", "nan"]).contains("--epsilon"));
-    assert!(fails(&["solve", s(&box_), "--threads", "0"]).contains("--threads"));
-    assert!(fails(&["solve", s(&box_), "--final-passes", "0"]).contains("--final-passes"));
-    assert!(fails(&["solve", s(&box_), "--final-passes", "5"]).contains("--final-passes"));
+    // Counts out of range are usage errors (status 2), named with their range.
+    for (opt, bad) in [
+        ("--threads", "0"),
+        ("--final-passes", "0"),
+        ("--final-passes", "5"),
+        ("--rays", "0"),
+        ("--max-iterations", "0"),
+    ] {
+        let out = hirad(&["solve", s(&box_), opt, bad]);
+        let e = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(out.status.code(), Some(2), "{opt} {bad}: {e}");
+        assert!(
+            e.contains(opt) && e.contains("is not in"),
+            "{opt} {bad}: {e}"
+        );
+    }
     for bad in ["lots", "2000000", "1.5"] {
         let out = hirad(&["solve", s(&box_), "--final-rays", bad]);
         let e = String::from_utf8(out.stderr).unwrap();

@@ -7,7 +7,7 @@ mod info;
 mod progress;
 mod solve;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::path::PathBuf;
 
 /// hirad: radiosity (diffuse global illumination) for huge scenes that repeat themselves.
@@ -43,7 +43,9 @@ pub enum Command {
 
 /// Parses the command line and runs the command.
 pub fn run() -> anyhow::Result<()> {
-    let cli = Cli::parse();
+    let args = joined_negative_values(std::env::args_os().collect());
+    let matches = negative_numbers(Cli::command()).get_matches_from(args);
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     match cli.command {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),
@@ -51,6 +53,41 @@ pub fn run() -> anyhow::Result<()> {
         Command::Solve(a) => solve::run(a),
         Command::Gen(a) => crate::generate::run(a),
     }
+}
+
+/// Lets every option's value be a negative number (`--epsilon -1` is then refused by the
+/// option's own check, with its range, instead of clap advising `-- -1`), in every command.
+fn negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if a.get_action().takes_values() && !a.is_positional() {
+            a.allow_negative_numbers(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(negative_numbers)
+}
+
+/// `--option -1e-3` as `--option=-1e-3`: clap takes `-1` and `-0.5` for values (see
+/// [`negative_numbers`]) but not a negative number with a signed exponent.
+fn joined_negative_values(args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::with_capacity(args.len());
+    for arg in args {
+        let negative = arg
+            .to_str()
+            .is_some_and(|s| s.starts_with('-') && s.parse::<f64>().is_ok());
+        if let Some(prev) = out.last_mut().filter(|_| negative)
+            && prev
+                .to_str()
+                .is_some_and(|p| p.starts_with("--") && p.len() > 2 && !p.contains('='))
+        {
+            prev.push("=");
+            prev.push(&arg);
+            continue;
+        }
+        out.push(arg);
+    }
+    out
 }
 
 /// Writes `text` to standard output. A closed pipe (`hirad info x | head -1`) ends the output

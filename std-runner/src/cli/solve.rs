@@ -32,9 +32,9 @@ pub struct Args {
     /// the scene's emitted power. Dimensionless; smaller is finer and slower.
     #[arg(long, default_value_t = 1e-3)]
     pub epsilon: f32,
-    /// Worker threads (results are identical for any count). Default: every core.
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// Worker threads, 1 to 1024 (results are identical for any count). Default: every core.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub threads: Option<u16>,
     /// Workspace size for hr, e.g. 64M, 2G, 500000000 (bytes; K/M/G are powers of 1024).
     /// Default: the planner's suggestion. A full workspace stops refinement and is reported.
     #[arg(long, value_parser = parse_bytes)]
@@ -52,12 +52,12 @@ pub struct Args {
     /// view); default: the scene's first camera, else a view of the whole scene.
     #[arg(long, allow_hyphen_values = true)]
     pub camera: Option<String>,
-    /// Image size in pixels, WxH.
-    #[arg(long, default_value = "640x480")]
-    pub size: String,
-    /// Samples per pixel side (N x N per pixel).
-    #[arg(long, default_value_t = 1)]
-    pub supersample: u32,
+    /// Image size in pixels, WxH (default 640x480).
+    #[arg(long)]
+    pub size: Option<String>,
+    /// Samples per pixel side (N x N per pixel; default 1).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::output::raster::MAX_SUPERSAMPLE as i64))]
+    pub supersample: Option<u32>,
     /// Compare with this results table and print the L2 error (area-weighted, in percent of
     /// the reference's largest radiosity) and the five polygons with the largest relative
     /// error (where the reference is at least 0.1% of its largest).
@@ -67,7 +67,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = VisibilityChoice::Obvhs)]
     pub visibility: VisibilityChoice,
     /// Visibility rays per receiver point and link.
-    #[arg(long, default_value_t = Settings::default().rays)]
+    #[arg(long, default_value_t = Settings::default().rays,
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub rays: u32,
     /// Final gather (hr): rays per receiving side of every polygon, from which each polygon
     /// takes its own light; `auto` spreads about a million rays over the scene (64 to 16384
@@ -76,7 +77,8 @@ pub struct Args {
     pub final_rays: u32,
     /// Final gather passes (1..=4): with 2 or more every patch gathers its own light first
     /// (each such pass costs about as much as the polygons' gather).
-    #[arg(long, default_value_t = Settings::default().final_passes)]
+    #[arg(long, default_value_t = Settings::default().final_passes,
+          value_parser = clap::value_parser!(u32).range(1..=4))]
     pub final_passes: u32,
     /// Smallest patch (hr), as a fraction of the scene's total polygon area.
     #[arg(long, default_value_t = Settings::default().min_area)]
@@ -86,7 +88,8 @@ pub struct Args {
     pub tolerance: f32,
     /// Most gather / push-pull iterations per solution (hr). A solution that reaches it
     /// before meeting the tolerance is reported as not converged and the run fails.
-    #[arg(long, default_value_t = Settings::default().max_iterations)]
+    #[arg(long, default_value_t = Settings::default().max_iterations,
+          value_parser = clap::value_parser!(u32).range(1..))]
     pub max_iterations: u32,
     /// Largest power imbalance (hr, % of what enters, any band) a solve may end with and
     /// succeed: light the transport lost or made (see the summary's power lines). Above 1% a
@@ -94,8 +97,9 @@ pub struct Args {
     #[arg(long, default_value_t = 5.0)]
     pub max_imbalance: f64,
     /// Element budget of the exact solver (its matrix grows as the square).
-    #[arg(long, default_value_t = ExactSettings::default().max_elements)]
-    pub elements: usize,
+    #[arg(long, default_value_t = ExactSettings::default().max_elements as u64,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub elements: u64,
     /// No progress bar, warnings or summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -144,20 +148,13 @@ pub fn run(a: Args) -> Result<()> {
             a.max_imbalance
         );
     }
-    if a.max_iterations == 0 {
-        bail!("--max-iterations must be at least 1");
-    }
-    if !(1..=4).contains(&a.final_passes) {
-        bail!("--final-passes must lie in 1..=4, got {}", a.final_passes);
-    }
-    if a.rays == 0 || a.rays > 1024 {
-        bail!("--rays must lie in 1..=1024, got {}", a.rays);
-    }
+    // Counts are range-checked as clap parses them (1..=1024 threads: 100,000 aborted the
+    // process setting up their stacks).
     let threads = match a.threads {
-        Some(0) => bail!("--threads must be at least 1"),
-        Some(n) => n,
+        Some(n) => n as usize,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
+    warn_unused(&a);
     let loaded = files::load_scene(&a.scene)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let y_up = loaded.format == files::Format::Obj;
@@ -200,9 +197,10 @@ pub fn run(a: Args) -> Result<()> {
         );
     }
     if let Some(path) = &a.image {
-        let size = output::parse_size(&a.size).map_err(|e| anyhow!("--size: {e}"))?;
+        let size = output::parse_size(a.size.as_deref().unwrap_or(DEFAULT_SIZE))
+            .map_err(|e| anyhow!("{e}"))?;
         let camera = match &a.camera {
-            Some(c) => output::parse_camera(c).map_err(|e| anyhow!("--camera: {e}"))?,
+            Some(c) => output::parse_camera(c).map_err(|e| anyhow!("{e}"))?,
             None => match scene.cameras.first() {
                 Some(c) => c.clone(),
                 // OBJ files are y up by convention; hirad's own scenes default to z up.
@@ -214,7 +212,7 @@ pub fn run(a: Args) -> Result<()> {
             path,
             &camera,
             size,
-            a.supersample,
+            a.supersample.unwrap_or(1),
             bands,
             &scene.band_names,
         )?);
@@ -311,7 +309,7 @@ pub fn run(a: Args) -> Result<()> {
         }
         Method::Exact => {
             let settings = ExactSettings {
-                max_elements: a.elements,
+                max_elements: usize::try_from(a.elements).unwrap_or(usize::MAX),
                 tolerance: (a.tolerance as f64 * 1e-3).max(1e-12),
                 ..ExactSettings::default()
             };
@@ -399,6 +397,43 @@ pub fn run(a: Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The image size without `--size`.
+const DEFAULT_SIZE: &str = "640x480";
+
+/// Warns about settings that change nothing: image options without `--image`, and a
+/// refinement threshold or smallest patch that leaves nothing to refine.
+fn warn_unused(a: &Args) {
+    if a.quiet {
+        return;
+    }
+    if a.image.is_none() {
+        for (given, name) in [
+            (a.size.is_some(), "--size"),
+            (a.camera.is_some(), "--camera"),
+            (a.supersample.is_some(), "--supersample"),
+        ] {
+            if given {
+                eprintln!("warning: {name} has no effect without --image");
+            }
+        }
+    }
+    if a.method == Method::Hr && a.epsilon >= 1.0 {
+        eprintln!(
+            "warning: --epsilon {} is at least 1: no link carries that much of the scene's light, so nothing is refined (the coarsest solution; the default is 1e-3, smaller is finer)",
+            a.epsilon
+        );
+    }
+    if a.method == Method::Hr && a.min_area >= 0.25 {
+        eprintln!(
+            "warning: --min-area {} leaves no patch room to split (a quarter of a polygon is less than that fraction of the scene's area)",
+            a.min_area
+        );
+    }
+    if a.method == Method::Exact && a.epsilon != 1e-3 {
+        eprintln!("warning: --epsilon has no effect with --method exact (see --elements)");
+    }
 }
 
 /// `--final-rays`: `auto` or a count in 0..=1048576.
