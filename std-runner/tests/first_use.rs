@@ -158,3 +158,61 @@ fn absurd_values_get_a_clear_answer() {
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(e.contains("nothing is refined"), "{e}");
 }
+
+/// Item 10: every command's help ends with real examples; `hirad --help` lists the commands
+/// one line each and points to the documentation.
+#[test]
+fn every_help_ends_with_examples() {
+    let commands: &[&[&str]] = &[
+        &[],
+        &["info"],
+        &["convert"],
+        &["flatten"],
+        &["solve"],
+        &["gen"],
+        &["gen", "poplar"],
+        &["gen", "stand"],
+        &["gen", "room"],
+        &["gen", "forest"],
+        &["gen", "canopy"],
+    ];
+    let names = ["info", "convert", "flatten", "solve", "gen"];
+    for cmd in commands {
+        let mut args = cmd.to_vec();
+        args.push("--help");
+        let help = ok(&args);
+        let tail = &help[help
+            .rfind("Examples:")
+            .unwrap_or_else(|| panic!("{cmd:?}: no examples:\n{help}"))..];
+        let examples: Vec<&str> = tail
+            .lines()
+            .skip(1)
+            .filter(|l| !l.trim().is_empty())
+            .collect();
+        assert!(
+            (2..=3).contains(&examples.len()),
+            "{cmd:?}: {} example lines:\n{tail}",
+            examples.len()
+        );
+        for e in &examples {
+            let words: Vec<&str> = e.split_whitespace().collect();
+            assert_eq!(words[0], "hirad", "{cmd:?}: {e}");
+            assert!(names.contains(&words[1]), "{cmd:?}: no command in {e}");
+            if !cmd.is_empty() {
+                assert_eq!(
+                    words[1], cmd[0],
+                    "{cmd:?}: an example of another command: {e}"
+                );
+            }
+        }
+    }
+    let top = ok(&["--help"]);
+    assert!(top.contains("docs/") && top.contains("README.md"), "{top}");
+    let list = &top[top.find("Commands:").unwrap()..top.find("Options:").unwrap()];
+    for line in list.lines().skip(1).filter(|l| !l.trim().is_empty()) {
+        assert!(line.len() <= 90, "a command's line is too long: {line:?}");
+    }
+    // The examples run: an info of a fixture, as its help shows.
+    let info = ok(&["info", s(&fixture("chair_room.hir"))]);
+    assert!(info.contains("polygons"));
+}

@@ -10,6 +10,9 @@ use std::path::PathBuf;
 
 /// Arguments of `hirad info`.
 #[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  hirad info fixtures/chair_room.hir\n  hirad info poplar.hirb --json > poplar.json\n  hirad info model.obj          # what an OBJ import makes of the file"
+)]
 pub struct Args {
     /// Scene file (.hir, .hirb or .obj).
     pub scene: PathBuf,

@@ -15,7 +15,17 @@ use std::path::PathBuf;
 /// Scenes are read from `.hir` (text), `.hirb` (binary image) or `.obj` (+ `.mtl`) files.
 /// Units: metres, W/m^2.
 #[derive(Parser, Debug)]
-#[command(name = "hirad", version, about, long_about = None)]
+#[command(
+    name = "hirad",
+    version,
+    about,
+    long_about = None,
+    after_help = "Each command has --help with examples. Documentation: README.md, and in docs/ the\n\
+                  scene format (format.md), OBJ import (obj.md) and the solvers (solver.md).\n\n\
+                  Examples:\n  \
+                  hirad solve fixtures/cornell_box.hir --results box.csv --image box.png\n  \
+                  hirad gen poplar --preset paper -o poplar.hirb && hirad info poplar.hirb"
+)]
 pub struct Cli {
     /// The command to run.
     #[command(subcommand)]
@@ -25,19 +35,26 @@ pub struct Cli {
 /// The commands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Describe a scene: bands, materials, polygons after expansion, clusters, originals,
-    /// instances, instancing depth, size of the binary image.
+    /// Describe a scene: its counts, bands, materials and instancing
+    ///
+    /// Bands, materials, polygons after expansion, clusters, originals, instances, instancing
+    /// depth, size of the binary image.
     Info(info::Args),
-    /// Convert a scene between .hir, .hirb and .obj (an .obj output is the expanded scene,
-    /// with its .mtl beside it).
+    /// Convert a scene between .hir, .hirb and .obj
+    ///
+    /// An .obj output is the expanded scene, with its .mtl beside it.
     Convert(convert::Args),
-    /// Expand every instance and write the scene as OBJ, faces in global-id order, materials
-    /// in the .mtl beside it.
+    /// Write the scene as OBJ with every instance expanded
+    ///
+    /// Faces in global-id order (face k is row k-1 of solve's results), materials in the
+    /// .mtl beside it.
     Flatten(flatten::Args),
-    /// Compute the radiosity of every polygon (W/m^2): results table, image, statistics,
-    /// error against a reference.
+    /// Compute the radiosity of every polygon: results table, image, statistics
+    ///
+    /// Radiosity in W/m^2 by hierarchical radiosity (default) or the exact full-matrix
+    /// solver; optionally the error against a reference results table.
     Solve(solve::Args),
-    /// Generate a procedural scene: poplar, stand, room, forest, canopy.
+    /// Generate a procedural scene: poplar, stand, room, forest, canopy
     Gen(crate::generate::Args),
 }
 

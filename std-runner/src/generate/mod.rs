@@ -33,6 +33,9 @@ use std::time::Instant;
 
 /// Arguments of `hirad gen`.
 #[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  hirad gen poplar --preset paper -o poplar.hirb\n  hirad gen canopy --rows 4 --plants-per-row 10 -o field.hirb\n  hirad gen room -o room.hirb && hirad solve room.hirb --image room.png"
+)]
 pub struct Args {
     /// The kind of scene.
     #[command(subcommand)]

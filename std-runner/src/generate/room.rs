@@ -30,6 +30,9 @@ use room_shell::ShellMaterials;
 
 /// Arguments of `hirad gen room`.
 #[derive(clap::Args, Debug, Clone)]
+#[command(
+    after_help = "Examples:\n  hirad gen room -o room.hirb\n  hirad gen room -o room.hirb && hirad solve room.hirb --image room.png"
+)]
 pub struct Args {
     /// Chairs (eight around each table, the rest along the walls).
     #[arg(long, default_value_t = 24)]
