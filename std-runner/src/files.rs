@@ -125,6 +125,8 @@ pub struct Loaded {
     pub warnings_total: u64,
     /// Faces the loader skipped (degenerate or too small for single precision; OBJ only).
     pub skipped_faces: u64,
+    /// The files read: the scene, and an OBJ's material libraries.
+    pub inputs: Vec<PathBuf>,
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -138,6 +140,7 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
     not_a_directory(path)?;
     let mut warnings = Vec::new();
     let (mut warnings_total, mut skipped_faces) = (0, 0);
+    let mut inputs = vec![path.to_path_buf()];
     let scene = match format {
         Format::Text => {
             let bytes = read(path)?;
@@ -150,7 +153,20 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
         Format::Obj => {
             let bytes = read(path)?;
             let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let mut load_mtl = obj::load_mtl_from(&dir);
+            let mut inner = obj::load_mtl_from(&dir);
+            // Remember the material libraries read, by either name `load_mtl_from` tries.
+            let mut load_mtl = |name: &str| {
+                let r = inner(name);
+                if r.is_ok() {
+                    let base = name.rsplit(['/', '\\']).next().unwrap_or(name);
+                    for p in [dir.join(name), dir.join(base)] {
+                        if p.is_file() && !inputs.contains(&p) {
+                            inputs.push(p);
+                        }
+                    }
+                }
+                r
+            };
             let imported = obj::import(&bytes, &mut load_mtl).map_err(|e| {
                 if e.file.is_empty() {
                     anyhow!("{}:{e}", path.display())
@@ -172,6 +188,7 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
         warnings,
         warnings_total,
         skipped_faces,
+        inputs,
     })
 }
 

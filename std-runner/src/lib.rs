@@ -8,6 +8,7 @@ pub mod generate;
 pub mod numbers;
 pub mod obj;
 pub mod output;
+pub mod paths;
 pub mod scene;
 pub mod solve;
 pub mod text;

@@ -216,3 +216,173 @@ fn every_help_ends_with_examples() {
     let info = ok(&["info", s(&fixture("chair_room.hir"))]);
     assert!(info.contains("polygons"));
 }
+
+/// Item 4: outputs are checked before any work: none may be a file the run reads, no two
+/// may be the same file, and each must be writable where it is. Nothing is written then.
+#[test]
+fn outputs_never_clobber_inputs_or_each_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("scene.hir");
+    std::fs::copy(fixture("cornell_box.hir"), &scene).unwrap();
+    let original = std::fs::read(&scene).unwrap();
+    let obj = d.join("cube.obj");
+    std::fs::copy(fixture("obj/cube.obj"), &obj).unwrap();
+    std::fs::copy(fixture("obj/cube.mtl"), d.join("cube.mtl")).unwrap();
+    let reference = d.join("ref.csv");
+    ok(&["solve", s(&scene), "--results", s(&reference), "-q"]);
+    let p = |name: &str| d.join(name);
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        // The scene itself, the OBJ's material library, the reference.
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--results".into(),
+                s(&scene).into(),
+            ],
+            "a file the run reads",
+        ),
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--stats".into(),
+                s(&scene).into(),
+            ],
+            "a file the run reads",
+        ),
+        (
+            vec![
+                "solve".into(),
+                s(&obj).into(),
+                "--image".into(),
+                s(&p("cube.mtl")).into(),
+            ],
+            "a file the run reads",
+        ),
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--reference".into(),
+                s(&reference).into(),
+                "--results".into(),
+                s(&reference).into(),
+            ],
+            "a file the run reads",
+        ),
+        (
+            vec![
+                "convert".into(),
+                s(&scene).into(),
+                "-o".into(),
+                s(&scene).into(),
+            ],
+            "a file the run reads",
+        ),
+        (
+            vec![
+                "flatten".into(),
+                s(&obj).into(),
+                "-o".into(),
+                s(&obj).into(),
+            ],
+            "a file the run reads",
+        ),
+        // One output over another.
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--results".into(),
+                s(&p("a.png")).into(),
+                "--image".into(),
+                s(&p("a.png")).into(),
+            ],
+            "name the same file",
+        ),
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--results".into(),
+                s(&p("x.json")).into(),
+                "--stats".into(),
+                format!("{}/./x.json", d.display()),
+            ],
+            "name the same file",
+        ),
+        // Folders that are not there, found before the solve.
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--results".into(),
+                s(&p("r.csv")).into(),
+                "--image".into(),
+                s(&p("nodir/x.png")).into(),
+            ],
+            "does not exist",
+        ),
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--results".into(),
+                s(&p("r.csv")).into(),
+                "--stats".into(),
+                s(&p("nodir/x.json")).into(),
+            ],
+            "does not exist",
+        ),
+        (
+            vec![
+                "gen".into(),
+                "room".into(),
+                "-o".into(),
+                s(&p("nodir/room.hirb")).into(),
+            ],
+            "does not exist",
+        ),
+        (
+            vec![
+                "solve".into(),
+                s(&scene).into(),
+                "--results".into(),
+                s(d).into(),
+            ],
+            "is a directory",
+        ),
+    ];
+    for (args, want) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let err = fails(&args);
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    assert_eq!(
+        std::fs::read(&scene).unwrap(),
+        original,
+        "the scene was touched"
+    );
+    let mut left: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["cube.mtl", "cube.obj", "ref.csv", "scene.hir"],
+        "files left behind"
+    );
+    // A device may take several outputs: it is written into, not replaced.
+    ok(&[
+        "solve",
+        s(&scene),
+        "--results",
+        "/dev/null",
+        "--stats",
+        "/dev/null",
+        "-q",
+    ]);
+}

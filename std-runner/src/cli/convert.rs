@@ -2,7 +2,7 @@
 
 use super::progress::Progress;
 use crate::files::{self, Format};
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -26,8 +26,8 @@ pub struct Args {
 /// Runs `hirad convert`.
 pub fn run(a: Args) -> Result<()> {
     let out_format = Format::of(&a.output)?;
-    check_distinct(&a.scene, &a.output)?;
     let loaded = files::load_scene(&a.scene)?;
+    check_scene_outputs(&loaded.inputs, &a.output, out_format)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     match out_format {
         Format::Text => {
@@ -52,13 +52,19 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 /// Refuses to overwrite the input with the output.
-pub(crate) fn check_distinct(input: &Path, output: &Path) -> Result<()> {
-    if let (Ok(i), Ok(o)) = (input.canonicalize(), output.canonicalize())
-        && i == o
-    {
-        bail!("{}: the output would overwrite the input", output.display());
+pub(crate) fn check_scene_outputs(inputs: &[PathBuf], output: &Path, format: Format) -> Result<()> {
+    let mtl = super::mtl_beside(output);
+    let mut outputs = vec![crate::paths::Output {
+        option: "-o",
+        path: output,
+    }];
+    if format == Format::Obj {
+        outputs.push(crate::paths::Output {
+            option: "-o (its .mtl)",
+            path: &mtl,
+        });
     }
-    Ok(())
+    crate::paths::check_outputs(inputs, &outputs)
 }
 
 /// Writes the expanded scene as OBJ + MTL through temporary files, renaming both into place

@@ -30,9 +30,9 @@ pub fn run(a: Args) -> Result<()> {
             a.output.display()
         );
     }
-    super::convert::check_distinct(&a.scene, &a.output)?;
     let start = Instant::now();
     let loaded = files::load_scene(&a.scene)?;
+    super::convert::check_scene_outputs(&loaded.inputs, &a.output, files::Format::Obj)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let stats = super::convert::write_obj(&a.scene, &loaded.scene, &a.output, a.quiet)?;
     super::warn_all(&stats.warnings, stats.warnings.len() as u64, a.quiet);

@@ -181,7 +181,22 @@ pub fn run(a: Args) -> Result<()> {
     let bands = scene.bands as usize;
     let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
 
-    // Outputs, checked before the (possibly long) solve.
+    // Outputs, checked before the (possibly long) solve: writable, none of them a file the
+    // run reads, no two the same.
+    let mut inputs = loaded.inputs.clone();
+    inputs.extend(a.reference.iter().cloned());
+    let named: Vec<crate::paths::Output<'_>> = [
+        ("--results", &a.results),
+        ("--stats", &a.stats),
+        ("--image", &a.image),
+    ]
+    .into_iter()
+    .filter_map(|(option, p)| {
+        p.as_deref()
+            .map(|path| crate::paths::Output { option, path })
+    })
+    .collect();
+    crate::paths::check_outputs(&inputs, &named)?;
     let mut outputs = Outputs::default();
     if let Some(path) = &a.reference {
         let table = output::read_results_file(path)?;

@@ -90,6 +90,22 @@ where
 /// Runs `hirad gen`.
 pub fn run(a: Args) -> Result<()> {
     let start = Instant::now();
+    let common = match &a.kind {
+        Kind::Poplar(k) => &k.common,
+        Kind::Stand(k) => &k.common,
+        Kind::Room(k) => &k.common,
+        Kind::Forest(k) => &k.common,
+        Kind::Canopy(k) => &k.common,
+    };
+    // Where the scene goes, checked before it is made.
+    Format::of(&common.output)?;
+    crate::paths::check_outputs(
+        &[],
+        &[crate::paths::Output {
+            option: "-o",
+            path: &common.output,
+        }],
+    )?;
     let (scene, common) = match &a.kind {
         Kind::Poplar(k) => (poplar::generate(k)?, &k.common),
         Kind::Stand(k) => (stand::generate(k)?, &k.common),
