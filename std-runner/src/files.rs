@@ -241,7 +241,8 @@ pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
     // owner-only mode of a temporary file.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    builder.tempfile_in(&dir).with_context(|| {
+    // Removed on SIGINT or SIGTERM (see `interrupt`).
+    crate::interrupt::temporary(|| builder.tempfile_in(&dir)).with_context(|| {
         format!(
             "{}: cannot create a temporary file in {}",
             path.display(),
@@ -255,6 +256,12 @@ pub fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
 /// into it instead: renaming over it would replace it with a file (as root, `/dev/null` for
 /// every program on the machine).
 pub fn persist(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
+    let temp = tmp.path().to_path_buf();
+    // No interruption between the output coming into place and the registry knowing it.
+    crate::interrupt::in_place(&temp, path, || persist_now(tmp, path))
+}
+
+fn persist_now(tmp: tempfile::NamedTempFile, path: &Path) -> Result<()> {
     if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
         let mut from = tmp
             .reopen()

@@ -5,6 +5,7 @@ pub mod cli;
 pub mod exact;
 pub mod files;
 pub mod generate;
+pub mod interrupt;
 pub mod numbers;
 pub mod obj;
 pub mod output;

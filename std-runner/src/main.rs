@@ -3,6 +3,11 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    if let Err(e) = hirad::interrupt::install() {
+        eprintln!(
+            "warning: cannot handle SIGINT and SIGTERM ({e}): an interrupted run may leave temporary files"
+        );
+    }
     match hirad::cli::run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -47,10 +47,13 @@ pub fn check_outputs(inputs: &[PathBuf], outputs: &[Output<'_>]) -> Result<()> {
             }
             // The output is written to a temporary file beside it, then renamed: that
             // file must be possible.
-            if let Err(e) = tempfile::Builder::new()
-                .prefix(".hirad-check.")
-                .tempfile_in(&dir)
-            {
+            let probe = crate::interrupt::uninterrupted(|| {
+                tempfile::Builder::new()
+                    .prefix(".hirad-check.")
+                    .tempfile_in(&dir)
+                    .map(drop)
+            });
+            if let Err(e) = probe {
                 bail!(
                     "{option} {}: cannot write in {}: {e}",
                     path.display(),

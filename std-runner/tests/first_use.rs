@@ -386,3 +386,84 @@ fn outputs_never_clobber_inputs_or_each_other() {
         "-q",
     ]);
 }
+
+/// Item 3: SIGINT or SIGTERM at any moment of a solve leaves no file but those there before
+/// (an older results table among them, untouched), exits with 130 or 143, and says which
+/// outputs were not written.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_solve_leaves_nothing_behind() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("field.hirb");
+    ok(&[
+        "gen",
+        "canopy",
+        "--rows",
+        "6",
+        "--plants-per-row",
+        "10",
+        "-q",
+        "-o",
+        s(&scene),
+    ]);
+    let old = d.join("r.csv");
+    std::fs::write(&old, "an older table\n").unwrap();
+    let listing = || {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let before = listing();
+    for (signal, after_ms, status) in [
+        ("-INT", 50, 130),
+        ("-INT", 400, 130),
+        ("-INT", 1500, 130),
+        ("-TERM", 800, 143),
+        ("-INT", 3000, 130),
+    ] {
+        let child = Command::new(env!("CARGO_BIN_EXE_hirad"))
+            .args([
+                "solve",
+                s(&scene),
+                "--results",
+                s(&old),
+                "--image",
+                s(&d.join("i.png")),
+                "--stats",
+                s(&d.join("s.json")),
+                "-q",
+            ])
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(after_ms));
+        let _ = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status();
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        if out.status.success() {
+            // Finished before the signal: every output is complete.
+            assert!(d.join("i.png").exists() && d.join("s.json").exists());
+            break;
+        }
+        assert_eq!(
+            out.status.code(),
+            Some(status),
+            "{signal} after {after_ms} ms: {err}"
+        );
+        assert!(
+            err.contains("interrupted by SIG")
+                && err.contains("not written:")
+                && err.contains("r.csv"),
+            "{signal} after {after_ms} ms: {err}"
+        );
+        assert_eq!(listing(), before, "{signal} after {after_ms} ms left files");
+        assert_eq!(std::fs::read_to_string(&old).unwrap(), "an older table\n");
+    }
+}

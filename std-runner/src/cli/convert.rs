@@ -64,7 +64,9 @@ pub(crate) fn check_scene_outputs(inputs: &[PathBuf], output: &Path, format: For
             path: &mtl,
         });
     }
-    crate::paths::check_outputs(inputs, &outputs)
+    crate::paths::check_outputs(inputs, &outputs)?;
+    crate::interrupt::expect(&outputs.iter().map(|o| o.path).collect::<Vec<_>>());
+    Ok(())
 }
 
 /// Writes the expanded scene as OBJ + MTL through temporary files, renaming both into place

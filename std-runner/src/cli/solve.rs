@@ -197,6 +197,7 @@ pub fn run(a: Args) -> Result<()> {
     })
     .collect();
     crate::paths::check_outputs(&inputs, &named)?;
+    crate::interrupt::expect(&named.iter().map(|o| o.path).collect::<Vec<_>>());
     let mut outputs = Outputs::default();
     if let Some(path) = &a.reference {
         let table = output::read_results_file(path)?;

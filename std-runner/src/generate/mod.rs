@@ -106,6 +106,7 @@ pub fn run(a: Args) -> Result<()> {
             path: &common.output,
         }],
     )?;
+    crate::interrupt::expect(&[&common.output]);
     let (scene, common) = match &a.kind {
         Kind::Poplar(k) => (poplar::generate(k)?, &k.common),
         Kind::Stand(k) => (stand::generate(k)?, &k.common),
