@@ -127,6 +127,9 @@ pub struct Loaded {
     pub skipped_faces: u64,
     /// The files read: the scene, and an OBJ's material libraries.
     pub inputs: Vec<PathBuf>,
+    /// For an OBJ, the face number (1-based) each polygon came from, in global-id order
+    /// (see `obj::ObjImport::faces`); `None` for other formats.
+    pub faces: Option<Vec<u64>>,
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -141,6 +144,7 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
     let mut warnings = Vec::new();
     let (mut warnings_total, mut skipped_faces) = (0, 0);
     let mut inputs = vec![path.to_path_buf()];
+    let mut faces = None;
     let scene = match format {
         Format::Text => {
             let bytes = read(path)?;
@@ -179,6 +183,7 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
             }
             warnings_total = imported.warnings_total;
             skipped_faces = imported.counts.skipped_faces;
+            faces = Some(imported.faces);
             imported.scene
         }
     };
@@ -189,6 +194,7 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
         warnings_total,
         skipped_faces,
         inputs,
+        faces,
     })
 }
 

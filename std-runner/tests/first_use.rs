@@ -467,3 +467,67 @@ fn an_interrupted_solve_leaves_nothing_behind() {
         assert_eq!(std::fs::read_to_string(&old).unwrap(), "an older table\n");
     }
 }
+
+/// Item 7: when an OBJ's faces are skipped or split, the results keep each polygon's face
+/// number, so a user's own table joins by it; and such a table reads back as a reference.
+#[test]
+fn results_keep_the_obj_face_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        d,
+        "m.mtl",
+        "newmtl lamp\nKd 0 0 0\nKe 10 10 10\nnewmtl grey\nKd 0.5 0.5 0.5\n",
+    );
+    // Face 1: a lamp facing down; face 2: a triangle; face 3: degenerate (skipped); face 4:
+    // a concave pentagon (split in three); face 5: a quad.
+    let obj = write(
+        d,
+        "m.obj",
+        "mtllib m.mtl\nusemtl lamp\n\
+         v 0 0 2\nv 1 0 2\nv 1 1 2\nv 0 1 2\n\
+         f 4 3 2 1\n\
+         usemtl grey\n\
+         v 0 0 0\nv 3 0 0\nv 3 3 0\n\
+         f 5 6 7\n\
+         f 5 6 5\n\
+         v 4 0 0\nv 8 0 0\nv 8 4 0\nv 6 1 0\nv 4 4 0\n\
+         f 8 9 10 11 12\n\
+         v 0 5 0\nv 3 5 0\nv 3 8 0\nv 0 8 0\n\
+         f 13 14 15 16\n",
+    );
+    let csv = d.join("r.csv");
+    let out = hirad(&["solve", s(&obj), "--results", s(&csv), "-q"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.last(), Some(&"face"), "{header:?}");
+    let faces: Vec<u64> = lines
+        .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+        .collect();
+    let pentagon = faces.iter().filter(|&&f| f == 4).count();
+    assert!(pentagon >= 2, "the pentagon was not split: {faces:?}");
+    let mut want = vec![1, 2];
+    want.extend(std::iter::repeat_n(4, pentagon));
+    want.push(5);
+    assert_eq!(faces, want, "face numbers of the rows");
+    // The table, face column and all, is a reference.
+    let e = ok(&["solve", s(&obj), "--reference", s(&csv), "-q"]);
+    assert!(e.contains("error 0.0000 %"), "{e}");
+    // hirad's own scenes have no face numbers: no column.
+    let hir = d.join("h.csv");
+    ok(&[
+        "solve",
+        s(&fixture("cornell_box.hir")),
+        "--results",
+        s(&hir),
+        "-q",
+    ]);
+    let h = std::fs::read_to_string(&hir).unwrap();
+    assert!(!h.lines().next().unwrap().contains("face"));
+}

@@ -237,7 +237,12 @@ pub fn run(a: Args) -> Result<()> {
         )?);
     }
     if let Some(path) = &a.results {
-        outputs.results = Some(ResultsFile::create(path, bands, two_sided)?);
+        outputs.results = Some(ResultsFile::create_with_faces(
+            path,
+            bands,
+            two_sided,
+            loaded.faces.clone(),
+        )?);
     }
 
     let progress = Progress::new(a.quiet);

@@ -92,6 +92,10 @@ pub struct ObjImport {
     pub warnings: Vec<String>,
     /// Every warning made, shown in `warnings` or not.
     pub warnings_total: u64,
+    /// Per polygon in global-id order, the number of the `f` statement it came from (1-based,
+    /// counting every face of the file, skipped ones included, as modelling programs number
+    /// them); the pieces of a split face share it.
+    pub faces: Vec<u64>,
     /// What the file held.
     pub counts: ObjCounts,
 }

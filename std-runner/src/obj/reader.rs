@@ -54,6 +54,8 @@ struct Reader<'a> {
     clusters: Clusters,
     warnings: Warnings,
     counts: ObjCounts,
+    /// The face number of every polygon added so far (see `ObjImport::faces`).
+    faces: Vec<u64>,
     corners: Vec<usize>,
     points: Vec<Vec3>,
     pieces: Vec<Piece>,
@@ -74,6 +76,7 @@ pub(crate) fn read(
         clusters: Clusters::new(),
         warnings: Warnings::default(),
         counts: ObjCounts::default(),
+        faces: Vec::new(),
         corners: Vec::new(),
         points: Vec::new(),
         pieces: Vec::new(),
@@ -100,6 +103,7 @@ pub(crate) fn read(
     }
     Ok(ObjImport {
         scene,
+        faces: std::mem::take(&mut r.faces),
         warnings_total: r.warnings.total(),
         warnings: r.warnings.finish(),
         counts: r.counts,
@@ -280,6 +284,9 @@ impl Reader<'_> {
                 .add(&self.positions, &self.piece_corners, material)
                 .map_err(|_| error("", at, "too many polygons or vertices in one group"))?;
             self.counts.polygons += 1;
+            // Clusters follow the file (every `o` and `g` starts a new one), so polygons are
+            // added in global-id order.
+            self.faces.push(self.counts.faces);
         }
         Ok(())
     }

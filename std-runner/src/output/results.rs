@@ -3,7 +3,10 @@
 //!
 //! Columns: `id,area,rad_0..rad_{n-1},irr_0..irr_{n-1}` for the front side, then
 //! `rad_back_0..`, `irr_back_0..` only when the scene has two-sided materials (one-sided
-//! polygons get 0 there). Units: m^2 for the area, W/m^2 for radiosity and irradiance.
+//! polygons get 0 there), then `face` only when the scene came from an OBJ file: the number
+//! of the `f` statement the polygon came from (1-based, as modelling programs number faces;
+//! the pieces of a split face share it, a skipped face has no row). Units: m^2 for the area,
+//! W/m^2 for radiosity and irradiance.
 //! Numbers are written with Rust's shortest round-trip form, so reading gives the same bits.
 
 use crate::files::{persist, temp_beside};
@@ -188,6 +191,8 @@ pub struct ResultsWriter<W: Write> {
     out: W,
     bands: usize,
     two_sided: bool,
+    /// The `face` column, by id.
+    faces: Option<Vec<u64>>,
     last: Option<u64>,
     line: String,
 }
@@ -195,7 +200,18 @@ pub struct ResultsWriter<W: Write> {
 impl<W: Write> ResultsWriter<W> {
     /// Writes the header for `bands` bands (1..=[`MAX_BANDS`]), with back-side columns when
     /// `two_sided` (the scene has two-sided materials).
-    pub fn new(mut out: W, bands: usize, two_sided: bool) -> io::Result<Self> {
+    pub fn new(out: W, bands: usize, two_sided: bool) -> io::Result<Self> {
+        Self::with_faces(out, bands, two_sided, None)
+    }
+
+    /// [`ResultsWriter::new`] with the `face` column: `faces[id]` for the row of polygon
+    /// `id` (the scene's OBJ face numbers).
+    pub fn with_faces(
+        mut out: W,
+        bands: usize,
+        two_sided: bool,
+        faces: Option<Vec<u64>>,
+    ) -> io::Result<Self> {
         if !(1..=MAX_BANDS).contains(&bands) {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
@@ -203,11 +219,15 @@ impl<W: Write> ResultsWriter<W> {
             ));
         }
         out.write_all(header(bands, two_sided).as_bytes())?;
+        if faces.is_some() {
+            out.write_all(b",face")?;
+        }
         out.write_all(b"\n")?;
         Ok(ResultsWriter {
             out,
             bands,
             two_sided,
+            faces,
             last: None,
             line: String::new(),
         })
@@ -244,6 +264,19 @@ impl<W: Write> Sink for ResultsWriter<W> {
                 }
             }
         }
+        if let Some(faces) = &self.faces {
+            match faces.get(p.id as usize) {
+                Some(f) => {
+                    let _ = write!(line, ",{f}");
+                }
+                None => {
+                    return Err(io::Error::new(
+                        io::ErrorKind::InvalidData,
+                        format!("polygon {} has no face number", p.id),
+                    ));
+                }
+            }
+        }
         line.push('\n');
         self.out.write_all(line.as_bytes())
     }
@@ -259,8 +292,18 @@ pub struct ResultsFile {
 impl ResultsFile {
     /// Creates the temporary file beside `path` and writes the header.
     pub fn create(path: &Path, bands: usize, two_sided: bool) -> anyhow::Result<Self> {
+        Self::create_with_faces(path, bands, two_sided, None)
+    }
+
+    /// [`ResultsFile::create`] with the `face` column (see [`ResultsWriter::with_faces`]).
+    pub fn create_with_faces(
+        path: &Path,
+        bands: usize,
+        two_sided: bool,
+        faces: Option<Vec<u64>>,
+    ) -> anyhow::Result<Self> {
         let tmp = temp_beside(path)?;
-        let writer = ResultsWriter::new(BufWriter::new(tmp), bands, two_sided)
+        let writer = ResultsWriter::with_faces(BufWriter::new(tmp), bands, two_sided, faces)
             .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))?;
         Ok(ResultsFile {
             path: path.to_path_buf(),

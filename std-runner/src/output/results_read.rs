@@ -81,11 +81,12 @@ pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
         );
     }
     let mut lines = bytes.split(|&c| c == b'\n').enumerate();
-    let mut table = match lines.next() {
+    let (mut table, with_faces) = match lines.next() {
         Some((_, h)) => read_header(strip_cr(h))?,
         None => return fail(1, 0, "empty file"),
     };
-    let expected = field_count(table.bands, table.two_sided);
+    let values = field_count(table.bands, table.two_sided);
+    let expected = values + with_faces as usize;
     for (index, raw) in lines {
         let line_no = index as u64 + 1;
         let line = strip_cr(raw);
@@ -124,10 +125,14 @@ pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
         let [rad_front, rad_back] = &mut table.radiosity;
         let [irr_front, irr_back] = &mut table.irradiance;
         let groups = [rad_front, irr_front, rad_back, irr_back];
-        for (g, column) in groups.into_iter().zip(f[2..].chunks(bands)) {
+        for (g, column) in groups.into_iter().zip(f[2..values].chunks(bands)) {
             for field in column {
                 g.push(parse_value(line_no, field)?);
             }
+        }
+        if with_faces {
+            // Checked like an id, not kept: a reference is matched by id.
+            parse_id(line_no, &f[values])?;
         }
     }
     Ok(table)
@@ -137,9 +142,12 @@ fn strip_cr(line: &[u8]) -> &[u8] {
     line.strip_suffix(b"\r").unwrap_or(line)
 }
 
-/// Reads the header: `id,area`, then `2 n` (one-sided) or `4 n` (two-sided) named columns.
-fn read_header(line: &[u8]) -> Result<ResultsTable, TableError> {
-    let f = fields(line);
+/// Reads the header: `id,area`, then `2 n` (one-sided) or `4 n` (two-sided) named columns,
+/// and an optional last column `face`; returns the empty table and whether `face` is there.
+fn read_header(line: &[u8]) -> Result<(ResultsTable, bool), TableError> {
+    let all = fields(line);
+    let with_faces = all.len() > 2 && all.last().is_some_and(|x| x.text == b"face");
+    let f = &all[..all.len() - with_faces as usize];
     let two_sided = f.iter().any(|x| x.text == b"rad_back_0");
     let per_band = if two_sided { 4 } else { 2 };
     let bands = f.len().saturating_sub(2) / per_band;
@@ -150,7 +158,8 @@ fn read_header(line: &[u8]) -> Result<ResultsTable, TableError> {
             column,
             format!(
                 "header has {} columns: expected `id,area`, then rad_K and irr_K for each \
-                 of 1 to {MAX_BANDS} bands K (and rad_back_K, irr_back_K for two-sided scenes)",
+                 of 1 to {MAX_BANDS} bands K (and rad_back_K, irr_back_K for two-sided scenes), \
+                 and an optional last column `face`",
                 f.len()
             ),
         );
@@ -168,7 +177,7 @@ fn read_header(line: &[u8]) -> Result<ResultsTable, TableError> {
             );
         }
     }
-    Ok(ResultsTable::new(bands, two_sided))
+    Ok((ResultsTable::new(bands, two_sided), with_faces))
 }
 
 fn parse_id(line: u64, f: &Field<'_>) -> Result<u64, TableError> {

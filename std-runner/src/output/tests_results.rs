@@ -270,3 +270,30 @@ fn file_errors_name_the_file_and_place() {
         .to_string();
     assert!(e.contains("missing.csv: cannot read"), "{e}");
 }
+
+#[test]
+fn the_face_column_is_written_last_and_read_back() {
+    let mut w = ResultsWriter::with_faces(Vec::new(), 1, false, Some(vec![7, 7, 9])).unwrap();
+    for id in 0..3 {
+        w.polygon(&poly(id, 1.0, [&[0.5], &[]], [&[1.0], &[]]))
+            .unwrap();
+    }
+    let text = String::from_utf8(w.finish().unwrap()).unwrap();
+    assert_eq!(
+        text,
+        "id,area,rad_0,irr_0,face\n0,1,0.5,1,7\n1,1,0.5,1,7\n2,1,0.5,1,9\n"
+    );
+    let t = read_results(text.as_bytes()).unwrap();
+    assert_eq!(t.len(), 3);
+    assert_eq!(t.radiosity(2, 0), &[0.5]);
+    // A row beyond the face numbers is refused, not written with a wrong one.
+    let mut w = ResultsWriter::with_faces(Vec::new(), 1, false, Some(vec![1])).unwrap();
+    assert!(
+        w.polygon(&poly(1, 1.0, [&[0.5], &[]], [&[1.0], &[]]))
+            .is_err()
+    );
+    // A face that is not a whole number is located.
+    let (l, c, m) = err("id,area,rad_0,irr_0,face\n0,1,2,3,x\n");
+    assert_eq!((l, c), (2, 9));
+    assert!(m.contains("`x`"), "{m}");
+}

@@ -163,7 +163,7 @@ fn summary_names_settings_cost_and_error() {
         "1234 elements",
         "56789 links",
         "budget limited",
-        "no reference",
+        "accuracy: not measured",
     ] {
         assert!(text.contains(word), "`{word}` missing in {text}");
     }
