@@ -531,3 +531,103 @@ fn results_keep_the_obj_face_number() {
     let h = std::fs::read_to_string(&hir).unwrap();
     assert!(!h.lines().next().unwrap().contains("face"));
 }
+
+/// Item 8: the progress line moves forward and ends at 100%: every phase with a total runs
+/// from its first count to all of it without stepping back, the phases that each
+/// refinement pass runs again are named with their pass, open counts only grow, and the
+/// load shows every polygon loaded. (`HIRAD_PROGRESS=every` draws every update, terminal or
+/// not.)
+#[test]
+fn progress_moves_forward_to_the_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("field.hirb");
+    ok(&[
+        "gen",
+        "canopy",
+        "--rows",
+        "2",
+        "--plants-per-row",
+        "4",
+        "-q",
+        "-o",
+        s(&scene),
+    ]);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
+        .args(["solve", s(&scene), "--max-imbalance", "100"])
+        .env("HIRAD_PROGRESS", "every")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err
+        .split(['\r', '\n'])
+        .map(|l| l.trim_start_matches("\x1b[2K"))
+        .filter(|l| l.contains(" s") && (l.contains('[') || l.contains("): ")))
+        .collect();
+    assert!(lines.len() > 20, "{err}");
+    // (label, done, total) of every drawn line, in order.
+    let parse = |l: &str| -> (String, u64, Option<u64>) {
+        if let Some(at) = l.find(" [") {
+            let rest = &l[at + 2..];
+            let counts = rest.split("] ").nth(1).unwrap().split(' ').next().unwrap();
+            let (d, t) = counts.split_once('/').unwrap();
+            (
+                l[..at].to_string(),
+                d.parse().unwrap(),
+                Some(t.parse().unwrap()),
+            )
+        } else {
+            let (label, rest) = l.split_once("): ").unwrap();
+            let d = rest.split(',').next().unwrap().parse().unwrap();
+            (format!("{label})"), d, None)
+        }
+    };
+    let parsed: Vec<_> = lines.iter().map(|l| parse(l)).collect();
+    let mut i = 0;
+    let mut refining = Vec::new();
+    let mut iterations = Vec::new();
+    while i < parsed.len() {
+        // One stretch of the same label.
+        let label = &parsed[i].0;
+        let mut j = i;
+        while j < parsed.len() && &parsed[j].0 == label {
+            j += 1;
+        }
+        let run = &parsed[i..j];
+        for w in run.windows(2) {
+            assert!(
+                w[1].1 >= w[0].1,
+                "{label} went back: {} -> {}",
+                w[0].1,
+                w[1].1
+            );
+            assert_eq!(w[1].2, w[0].2, "{label} changed its total");
+        }
+        let last = run.last().unwrap();
+        if let Some(total) = last.2 {
+            assert_eq!(last.1, total, "{label} ended at {}/{total}", last.1);
+        }
+        if label.ends_with("refining (links)") {
+            refining.push(last.1);
+        }
+        if label == "solving (iterations)" {
+            iterations.extend(run.iter().map(|r| r.1));
+        }
+        if label == "loaded (polygons)" {
+            assert!(last.1 > 0);
+        }
+        i = j;
+    }
+    assert!(
+        refining.iter().all(|&n| n > 0),
+        "refining counts {refining:?}"
+    );
+    assert!(
+        parsed.iter().any(|p| p.0.starts_with("pass 2: ")),
+        "passes are not named"
+    );
+    assert!(
+        iterations.windows(2).all(|w| w[1] >= w[0]) && iterations.last() > Some(&0),
+        "iterations {iterations:?}"
+    );
+}

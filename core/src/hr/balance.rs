@@ -105,6 +105,9 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
     // Per leaf: escaping and back-absorbed fractions per side, and the back direct light of
     // one-sided polygons per band.
     let per = 4 + nb;
+    // Both pools under one phase: the count runs on over them.
+    let all = st.pool(Kind::Patch1).len as u64 + st.pool(Kind::Patch2).len as u64;
+    let mut offset = 0u64;
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;
         run_chunks(
@@ -144,11 +147,12 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
             &mut |done, total| {
                 progress.report(
                     "power balance (patches)",
-                    (done * CHUNK).min(n) as u64,
-                    (total * CHUNK).min(n) as u64,
+                    offset + (done * CHUNK).min(n) as u64,
+                    all.max(offset + (total * CHUNK).min(n) as u64),
                 )
             },
         );
+        offset += n as u64;
     }
     ctx.out
 }

@@ -40,6 +40,9 @@ pub(crate) fn update<E: Executor>(
     super::solve::gather(st, ws, ex, true, true);
     super::bins::update(st, ws, false);
     super::solve::push(st, ws);
+    // Both pools under one phase: the count runs on over them.
+    let all = st.pool(Kind::Patch1).len as u64 + st.pool(Kind::Patch2).len as u64;
+    let mut offset = 0u64;
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;
         let mut ctx = Ctx {
@@ -85,11 +88,12 @@ pub(crate) fn update<E: Executor>(
             &mut |done, total| {
                 progress.report(
                     "closing (patches)",
-                    (done * CHUNK).min(n) as u64,
-                    (total * CHUNK).min(n) as u64,
+                    offset + (done * CHUNK).min(n) as u64,
+                    all.max(offset + (total * CHUNK).min(n) as u64),
                 )
             },
         );
+        offset += n as u64;
     }
 }
 

@@ -50,6 +50,13 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
 ) {
     let nb = st.bands;
     let out = st.lay.strides.prepare_out();
+    // Both pools under one phase: the count runs on over them.
+    let new = |st: &State, pool: usize| {
+        let len = st.patches[pool].len as u64;
+        len - (st.prepared[pool] as u64).min(len)
+    };
+    let all = new(st, 0) + new(st, 1);
+    let mut offset = 0u64;
     for (pool, kind) in [Kind::Patch1, Kind::Patch2].into_iter().enumerate() {
         // Only the patches made since the last call (they come at the end of the pool).
         let n = st.pool(kind).len as usize;
@@ -113,11 +120,12 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
             &mut |done, total| {
                 progress.report(
                     "lighting patches",
-                    (done * FINE_CHUNK).min(count) as u64,
-                    (total * FINE_CHUNK).min(count) as u64,
+                    offset + (done * FINE_CHUNK).min(count) as u64,
+                    all.max(offset + (total * FINE_CHUNK).min(count) as u64),
                 )
             },
         );
+        offset += count as u64;
     }
 }
 

@@ -505,6 +505,9 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
     let per = 1 + 2 * nb;
     let em = emitters(st, ws);
     let mut cast = 0u64;
+    // Both pools under one phase: the count runs on over them.
+    let all = st.pool(Kind::Patch1).len as u64 + st.pool(Kind::Patch2).len as u64;
+    let mut offset = 0u64;
     for kind in [Kind::Patch1, Kind::Patch2] {
         let n = st.pool(kind).len as usize;
         let mut ctx = Ctx {
@@ -590,11 +593,12 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
             &mut |done, total| {
                 progress.report(
                     "final gather (patches)",
-                    (done * CHUNK).min(n) as u64,
-                    (total * CHUNK).min(n) as u64,
+                    offset + (done * CHUNK).min(n) as u64,
+                    all.max(offset + (total * CHUNK).min(n) as u64),
                 )
             },
         );
+        offset += n as u64;
     }
     super::solve::pull(st, ws);
     cast

@@ -86,6 +86,7 @@ pub(crate) fn load<S: SceneSource>(
         contraction: f32::INFINITY,
         prepared: [0; 2],
         pending: (u32::MAX, 0),
+        pending_links: 0,
         touched: [(0, u32::MAX); 3],
         shadow_checked: [0; 2],
         closed: false,

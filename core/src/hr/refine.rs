@@ -53,6 +53,7 @@ pub(crate) fn add_link(
     st.set_links_head(ws, recv, i);
     if flags & PENDING != 0 {
         st.pending = (st.pending.0.min(i), st.pending.1.max(i + 1));
+        st.pending_links += 1;
     }
     let t = &mut st.touched[kind_slot(recv.kind())];
     *t = (t.0.min(recv.index()), t.1.max(recv.index() + 1));
@@ -89,10 +90,13 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
         (st.pending.1 as usize).min(st.links.len as usize),
     );
     st.pending = (u32::MAX, 0);
+    let pending = core::mem::take(&mut st.pending_links);
     if first >= n {
         return;
     }
     let count = n - first;
+    // Progress counts the links evaluated, not the slots of the range looked at.
+    let evaluated = core::cell::Cell::new(0u64);
     let out = st.lay.strides.eval_out();
     let kk = st.lay.strides.link_k;
     let items =
@@ -148,15 +152,10 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 c.st.set_link(c.ws, i as u32, &l);
                 c.st.stats.evaluations += 1;
                 c.st.stats.rays += o[kk + 2] as u64;
+                evaluated.set(evaluated.get() + 1);
             }
         },
-        &mut |done, total| {
-            progress.report(
-                "evaluating links",
-                (done * FINE_CHUNK).min(count) as u64,
-                (total * FINE_CHUNK).min(count) as u64,
-            )
-        },
+        &mut |_, _| progress.report("evaluating links", evaluated.get(), pending.max(1)),
     );
 }
 

@@ -59,7 +59,8 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     st.stats.iteration_capped = false;
     st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
-        progress.report("solving (iterations)", it as u64, 0);
+        // Every solution's iterations counted on from the last one's: the count only grows.
+        progress.report("solving (iterations)", st.stats.iterations, 0);
         gather(st, ws, ex, false, it == 0);
         push(st, ws);
         let jumped = extrapolate > 0.0;

@@ -51,8 +51,10 @@ pub(crate) struct State {
     /// Patches of each pool below these indices are prepared (see `direct`): new patches
     /// only ever come at the end of their pool.
     pub prepared: [u32; 2],
-    /// Links waiting for evaluation lie in `pending.0..pending.1` (empty when start >= end).
+    /// Links waiting for evaluation lie in `pending.0..pending.1` (empty when start >= end);
+    /// there are `pending_links` of them.
     pub pending: (u32, u32),
+    pub pending_links: u64,
     /// Per kind of receiver (clusters, one-sided, two-sided patches), the index range that
     /// may hold links no refinement pass has examined yet (see `refine`).
     pub touched: [(u32, u32); 3],

@@ -1,6 +1,11 @@
 //! A one-line progress bar on stderr for long solves: silent for the first second, redrawn at
-//! most ten times a second, only when stderr is a terminal, never with `--quiet`. Safe to
-//! update from several threads.
+//! most ten times a second (and whenever a phase starts or completes, so that no phase shows
+//! a stale count), only when stderr is a terminal, never with `--quiet`. A phase with a known
+//! total shows its bar, its count and, once it has run a few seconds, the time it still
+//! needs at its pace so far. Safe to update from several threads.
+//!
+//! `HIRAD_PROGRESS=always` draws it even when stderr is not a terminal (a log);
+//! `HIRAD_PROGRESS=every` draws every update from the start (what the tests read).
 
 use std::io::{IsTerminal, Write};
 use std::sync::Mutex;
@@ -18,10 +23,15 @@ const BAR: usize = 30;
 /// Longest phase name shown (characters).
 const PHASE_CHARS: usize = 40;
 
+/// A phase that has run this long shows how long it still needs.
+const ETA_AFTER: Duration = Duration::from_secs(3);
+
 struct State {
     phase: String,
     total: Option<u64>,
     done: u64,
+    /// When the current phase started.
+    since: Instant,
     last_draw: Option<Instant>,
     shown: bool,
     out: Box<dyn Write + Send>,
@@ -31,26 +41,36 @@ struct State {
 /// count (iterations).
 pub struct Progress {
     enabled: bool,
+    /// Every update drawn, from the start (`HIRAD_PROGRESS=every`).
+    every: bool,
     start: Instant,
     state: Mutex<State>,
 }
 
 impl Progress {
-    /// A reporter on stderr; shows nothing when `quiet` or when stderr is not a terminal.
+    /// A reporter on stderr; shows nothing when `quiet` or when stderr is not a terminal
+    /// (unless `HIRAD_PROGRESS` says otherwise: see the module).
     pub fn new(quiet: bool) -> Self {
-        let enabled = !quiet && std::io::stderr().is_terminal();
-        Self::with_output(enabled, Box::new(std::io::stderr()))
+        let mode = std::env::var("HIRAD_PROGRESS").unwrap_or_default();
+        let forced = mode == "always" || mode == "every";
+        let enabled = !quiet && (forced || std::io::stderr().is_terminal());
+        let mut p = Self::with_output(enabled, Box::new(std::io::stderr()));
+        p.every = mode == "every";
+        p
     }
 
     /// A reporter on any writer (for tests).
     pub(crate) fn with_output(enabled: bool, out: Box<dyn Write + Send>) -> Self {
+        let start = Instant::now();
         Progress {
             enabled,
-            start: Instant::now(),
+            every: false,
+            start,
             state: Mutex::new(State {
                 phase: String::new(),
                 total: None,
                 done: 0,
+                since: start,
                 last_draw: None,
                 shown: false,
                 out,
@@ -65,21 +85,36 @@ impl Progress {
 
     /// Starts a phase: `total` steps when known, else an open count. Resets the count.
     pub fn phase(&self, name: &str, total: Option<u64>) {
-        self.update(Instant::now(), |s| {
+        self.phase_at(name, total, 0);
+    }
+
+    /// Starts a phase with `done` steps already done (one update: a phase that starts
+    /// complete shows so at once).
+    pub fn phase_at(&self, name: &str, total: Option<u64>, done: u64) {
+        let now = Instant::now();
+        self.update(now, |s| {
             s.phase = name.chars().take(PHASE_CHARS).collect();
             s.total = total;
-            s.done = 0;
+            s.done = done;
+            s.since = now;
+            true
         });
     }
 
     /// Sets the steps done in the current phase.
     pub fn set(&self, done: u64) {
-        self.update(Instant::now(), |s| s.done = done);
+        self.update(Instant::now(), |s| {
+            s.done = done;
+            s.total.is_some_and(|t| done >= t)
+        });
     }
 
     /// Adds steps done in the current phase.
     pub fn advance(&self, steps: u64) {
-        self.update(Instant::now(), |s| s.done = s.done.saturating_add(steps));
+        self.update(Instant::now(), |s| {
+            s.done = s.done.saturating_add(steps);
+            false
+        });
     }
 
     /// Clears the line, if one was drawn.
@@ -98,22 +133,31 @@ impl Progress {
     /// [`Progress::set`] at a given time (for tests).
     #[cfg(test)]
     pub(crate) fn set_at(&self, done: u64, now: Instant) {
-        self.update(now, |s| s.done = done);
+        self.update(now, |s| {
+            s.done = done;
+            false
+        });
     }
 
-    /// Applies `change` and redraws if it is time to.
-    fn update(&self, now: Instant, change: impl FnOnce(&mut State)) {
+    /// Applies `change` (which says whether the update must be drawn: a phase starting or
+    /// completing) and redraws if it is time to.
+    fn update(&self, now: Instant, change: impl FnOnce(&mut State) -> bool) {
         if !self.enabled {
             return;
         }
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        change(&mut s);
+        let must = change(&mut s);
         let elapsed = now.saturating_duration_since(self.start);
-        let due = elapsed >= QUIET_START
-            && s.last_draw
-                .is_none_or(|t| now.saturating_duration_since(t) >= REDRAW_EVERY);
+        let due = self.every
+            || (elapsed >= QUIET_START
+                && (must
+                    || s.last_draw
+                        .is_none_or(|t| now.saturating_duration_since(t) >= REDRAW_EVERY)));
         if due {
-            let text = line(&s.phase, s.done, s.total, elapsed);
+            let mut text = line(&s.phase, s.done, s.total, elapsed);
+            if let Some(left) = remaining(s.done, s.total, now.saturating_duration_since(s.since)) {
+                text.push_str(&format!(", about {} left", duration(left)));
+            }
             let _ = write!(s.out, "\r\x1b[2K{text}");
             let _ = s.out.flush();
             s.last_draw = Some(now);
@@ -125,6 +169,28 @@ impl Progress {
 impl Drop for Progress {
     fn drop(&mut self) {
         self.finish();
+    }
+}
+
+/// The time a phase with a total still needs at its pace so far, once it has run
+/// [`ETA_AFTER`] and is neither done nor just started.
+pub fn remaining(done: u64, total: Option<u64>, in_phase: Duration) -> Option<Duration> {
+    let total = total?;
+    if in_phase < ETA_AFTER || done == 0 || done >= total {
+        return None;
+    }
+    Some(in_phase.mul_f64((total - done) as f64 / done as f64))
+}
+
+/// `42 s`, `3 min 20 s`, `1 h 05 min`.
+fn duration(d: Duration) -> String {
+    let s = d.as_secs();
+    if s < 60 {
+        format!("{s} s")
+    } else if s < 3600 {
+        format!("{} min {:02} s", s / 60, s % 60)
+    } else {
+        format!("{} h {:02} min", s / 3600, (s % 3600) / 60)
     }
 }
 

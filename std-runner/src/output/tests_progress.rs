@@ -78,3 +78,35 @@ fn disabled_shows_nothing() {
     assert_eq!(out.text(), "");
     assert!(!Progress::new(true).enabled(), "quiet disables it");
 }
+
+#[test]
+fn the_time_left_shows_once_a_phase_has_run_a_while() {
+    use super::progress::remaining;
+    let s = Duration::from_secs;
+    assert_eq!(remaining(10, Some(100), s(1)), None, "too early to tell");
+    assert_eq!(remaining(0, Some(100), s(10)), None, "nothing done yet");
+    assert_eq!(remaining(100, Some(100), s(10)), None, "done");
+    assert_eq!(remaining(5, None, s(10)), None, "an open count");
+    assert_eq!(remaining(25, Some(100), s(10)), Some(s(30)));
+}
+
+#[test]
+fn a_new_phase_and_a_finished_one_are_drawn_at_once() {
+    let out = Shared::default();
+    let p = Progress::with_output(true, Box::new(out.clone()));
+    // Past the quiet first second (the run's own clock).
+    std::thread::sleep(Duration::from_millis(1050));
+    p.phase_at("loaded (polygons)", Some(40), 40);
+    assert!(out.text().contains("40/40 100%"), "{}", out.text());
+    // A new phase is drawn even right after a draw, with its count.
+    p.phase_at("refining (links)", None, 17);
+    assert!(
+        out.text().contains("refining (links): 17"),
+        "{}",
+        out.text()
+    );
+    // So is its completion.
+    p.phase("gather", Some(10));
+    p.set(10);
+    assert!(out.text().contains("10/10 100%"), "{}", out.text());
+}

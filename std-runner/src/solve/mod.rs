@@ -65,6 +65,10 @@ pub fn world_polygons(scene: &Scene) -> Vec<Vec<Vec3>> {
 struct ProgressAdapter<'a> {
     bar: &'a Progress,
     phase: String,
+    /// Refinement passes started: the phases that every pass runs again are shown with
+    /// theirs, each going from 0 to 100% (one bar over all passes would run backwards as
+    /// the passes add links).
+    pass: u64,
     /// Seconds per phase name (without the units in parentheses), in order of appearance.
     times: Vec<(String, f64)>,
     /// The phase being timed (index into `times`) and since when.
@@ -102,13 +106,24 @@ impl hr::Progress for ProgressAdapter<'_> {
     fn report(&mut self, what: &str, done: u64, total: u64) {
         if what != self.phase {
             self.phase = what.to_string();
-            self.bar.phase(what, (total > 0).then_some(total));
             let name = phase_name(what).to_string();
+            if name == "refining" {
+                self.pass += 1;
+            }
+            let label = match name.as_str() {
+                "refining" | "lighting patches" | "evaluating links" if self.pass > 0 => {
+                    format!("pass {}: {what}", self.pass)
+                }
+                _ => what.to_string(),
+            };
+            self.bar
+                .phase_at(&label, (total > 0).then_some(total), done);
             if self.current.is_none_or(|(i, _)| self.times[i].0 != name) {
                 self.start(&name, Instant::now());
             }
+        } else {
+            self.bar.set(done);
         }
-        self.bar.set(done);
     }
 }
 
@@ -160,6 +175,7 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     let mut adapter = ProgressAdapter {
         bar: progress,
         phase: String::new(),
+        pass: 0,
         times: Vec::new(),
         current: None,
     };
