@@ -631,3 +631,86 @@ fn progress_moves_forward_to_the_end() {
         "iterations {iterations:?}"
     );
 }
+
+/// The pixels of an 8-bit RGB PNG.
+fn png_pixels(path: &Path) -> Vec<[u8; 3]> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf[..info.buffer_size()]
+        .chunks(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect()
+}
+
+/// Item 9: a two-band picture (PAR/NIR, plants' default) says which band each colour shows,
+/// and `--display-bands` chooses them.
+#[test]
+fn false_colour_is_explained_and_chosen() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("field.hirb");
+    ok(&[
+        "gen",
+        "canopy",
+        "--rows",
+        "1",
+        "--plants-per-row",
+        "2",
+        "-q",
+        "-o",
+        s(&scene),
+    ]);
+    let run = |extra: &[&str], png: &Path| {
+        let mut args = vec![
+            "solve",
+            s(&scene),
+            "--image",
+            s(png),
+            "--max-imbalance",
+            "100",
+        ];
+        args.extend_from_slice(extra);
+        let out = hirad(&args);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{err}");
+        err
+    };
+    let false_colour = d.join("f.png");
+    let err = run(&[], &false_colour);
+    assert!(
+        err.contains("red = nir, green = par, blue = par") && err.contains("--display-bands"),
+        "{err}"
+    );
+    let grey = d.join("g.png");
+    let err = run(&["--display-bands", "nir"], &grey);
+    assert!(err.contains("grey = nir"), "{err}");
+    let px = png_pixels(&grey);
+    assert!(px.iter().all(|p| p[0] == p[1] && p[1] == p[2]), "not grey");
+    assert!(px.iter().any(|p| p[0] > 0), "black");
+    // In false colour the leaves (NIR much brighter than PAR) look red.
+    let px = png_pixels(&false_colour);
+    assert!(
+        px.iter().any(|p| p[0] > p[1]),
+        "no red in the false colour picture"
+    );
+    // Bands are checked, by name or index.
+    let e = String::from_utf8_lossy(
+        &hirad(&[
+            "solve",
+            s(&scene),
+            "--image",
+            s(&d.join("x.png")),
+            "--display-bands",
+            "red",
+        ])
+        .stderr,
+    )
+    .to_string();
+    assert!(
+        e.contains("`red` is not a band of this scene") && e.contains("par"),
+        "{e}"
+    );
+    assert!(!d.join("x.png").exists());
+}

@@ -58,6 +58,11 @@ pub struct Args {
     /// Image size in pixels, WxH (default 640x480).
     #[arg(long)]
     pub size: Option<String>,
+    /// Bands a PNG shows: one band (grey) or three as red,green,blue, by name or index, e.g.
+    /// `par`, `nir,par,par`. Default: grey for 1 band, `nir,par,par` false colour for 2
+    /// (PAR/NIR, as colour-infrared pictures), the first three as R,G,B otherwise.
+    #[arg(long)]
+    pub display_bands: Option<String>,
     /// Samples per pixel side (N x N per pixel; default 1).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::output::raster::MAX_SUPERSAMPLE as i64))]
     pub supersample: Option<u32>,
@@ -227,14 +232,43 @@ pub fn run(a: Args) -> Result<()> {
                     .map_err(|e| anyhow!("{e}"))?,
             },
         };
-        outputs.image = Some(ImageSink::new(
+        let mut sink = ImageSink::new(
             path,
             &camera,
             size,
             a.supersample.unwrap_or(1),
             bands,
             &scene.band_names,
-        )?);
+        )?;
+        if sink.is_png() {
+            let display = match &a.display_bands {
+                Some(spec) => output::DisplayBands::parse(spec, bands, &scene.band_names)
+                    .map_err(|e| anyhow!("{e}"))?,
+                None => output::DisplayBands::default_for(bands),
+            };
+            if !a.quiet && (bands != 3 || a.display_bands.is_some()) {
+                let why = if a.display_bands.is_some() {
+                    ""
+                } else if bands == 2 {
+                    " (false colour, as colour-infrared pictures; --display-bands chooses)"
+                } else if bands > 3 {
+                    " (the first three bands; --display-bands chooses)"
+                } else {
+                    " (--display-bands chooses)"
+                };
+                eprintln!(
+                    "note: {} shows {}{why}",
+                    path.display(),
+                    display.describe(&scene.band_names)
+                );
+            }
+            sink = sink.with_display(display);
+        } else if a.display_bands.is_some() && !a.quiet {
+            eprintln!(
+                "warning: --display-bands has no effect on an EXR image (it keeps every band)"
+            );
+        }
+        outputs.image = Some(sink);
     }
     if let Some(path) = &a.results {
         outputs.results = Some(ResultsFile::create_with_faces(
@@ -437,6 +471,7 @@ fn warn_unused(a: &Args) {
             (a.size.is_some(), "--size"),
             (a.camera.is_some(), "--camera"),
             (a.supersample.is_some(), "--supersample"),
+            (a.display_bands.is_some(), "--display-bands"),
         ] {
             if given {
                 eprintln!("warning: {name} has no effect without --image");

@@ -5,7 +5,7 @@
 use super::camera::Size;
 use super::exr_file::write_exr;
 use super::frame::{Frame, channel_names};
-use super::png_file::write_png;
+use super::png_file::{DisplayBands, write_png};
 use super::raster::Rasterizer;
 use crate::files::{persist, temp_beside};
 use crate::scene::Camera;
@@ -48,6 +48,7 @@ pub struct ImageSink {
     format: ImageFormat,
     raster: Rasterizer,
     channels: Vec<String>,
+    display: DisplayBands,
 }
 
 impl ImageSink {
@@ -70,7 +71,19 @@ impl ImageSink {
             format,
             raster,
             channels: channel_names(bands, band_names),
+            display: DisplayBands::default_for(bands),
         })
+    }
+
+    /// Shows `display` in the PNG's red, green and blue (an EXR keeps every band).
+    pub fn with_display(mut self, display: DisplayBands) -> Self {
+        self.display = display;
+        self
+    }
+
+    /// True when the image is a PNG (whose colours are chosen bands).
+    pub fn is_png(&self) -> bool {
+        self.format == ImageFormat::Png
     }
 
     /// The image as rendered so far (linear radiance, W/m^2/sr).
@@ -86,7 +99,7 @@ impl ImageSink {
         let mut w = BufWriter::new(tmp);
         match self.format {
             ImageFormat::Exr => write_exr(&frame, &mut w),
-            ImageFormat::Png => write_png(&frame, &mut w),
+            ImageFormat::Png => write_png(&frame, self.display, &mut w),
         }
         .map_err(|e| anyhow!("{}: {e:#}", path.display()))?;
         w.flush()

@@ -26,7 +26,7 @@ pub use exr_file::{read_exr, write_exr};
 pub use frame::{Frame, channel_names};
 pub use image::{ImageFormat, ImageSink};
 pub use outputs::Outputs;
-pub use png_file::{tone_map, write_png};
+pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png};
 pub use progress::Progress;
 pub use raster::Rasterizer;
 pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compare};

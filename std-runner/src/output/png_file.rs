@@ -2,10 +2,11 @@
 //!
 //! Operator: linear exposure, then clipping, then the sRGB transfer curve. The exposure is
 //! automatic: the 99th percentile of the luminance (Rec. 709 weights) of the lit pixels maps
-//! to 0.9, so the brightest 1 % may clip. Bands become display colours first: 1 band is grey;
-//! 2 bands (PAR, NIR) are false colour, red = band 1 and green = blue = band 0 (so light of
-//! equal bands is grey, band 0 alone cyan, band 1 alone red, as in colour-infrared
-//! pictures); 3 bands are R, G, B; more than 3 show the first three as R, G, B.
+//! to 0.9, so the brightest 1 % may clip. Bands become display colours first (see
+//! [`DisplayBands`]): by default 1 band is grey; 2 bands (PAR, NIR) are false colour, red =
+//! band 1 and green = blue = band 0 (so light of equal bands is grey, band 0 alone cyan,
+//! band 1 alone red, as in colour-infrared pictures); 3 bands are R, G, B; more than 3 show
+//! the first three as R, G, B. `--display-bands` chooses otherwise.
 
 use super::frame::Frame;
 use anyhow::anyhow;
@@ -17,13 +18,78 @@ pub const EXPOSURE_PERCENTILE: f64 = 0.99;
 /// Display value the percentile luminance maps to.
 pub const EXPOSURE_TARGET: f32 = 0.9;
 
-/// Linear display colour of one pixel.
-fn display_rgb(px: &[f32]) -> [f32; 3] {
-    match *px {
-        [y] => [y, y, y],
-        [par, nir] => [nir, par, par],
-        [r, g, b, ..] => [r, g, b],
-        [] => [0.0; 3],
+/// Which band each display channel (red, green, blue) shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DisplayBands(pub [usize; 3]);
+
+impl DisplayBands {
+    /// The default for a scene of `bands` bands (see the module).
+    pub fn default_for(bands: usize) -> Self {
+        match bands {
+            0 | 1 => DisplayBands([0, 0, 0]),
+            2 => DisplayBands([1, 0, 0]),
+            _ => DisplayBands([0, 1, 2]),
+        }
+    }
+
+    /// `--display-bands`: one band (grey) or three (red, green, blue), each a band name of
+    /// the scene (any case) or a band index from 0, separated by commas.
+    pub fn parse(spec: &str, bands: usize, names: &[String]) -> Result<Self, String> {
+        let known = || {
+            let list: Vec<String> = (0..bands)
+                .map(|b| match names.get(b).filter(|n| !n.is_empty()) {
+                    Some(n) => format!("{b} ({n})"),
+                    None => b.to_string(),
+                })
+                .collect();
+            list.join(", ")
+        };
+        let band = |word: &str| -> Result<usize, String> {
+            let w = word.trim();
+            if let Some(b) = names
+                .iter()
+                .position(|n| !n.is_empty() && n.eq_ignore_ascii_case(w))
+            {
+                return Ok(b);
+            }
+            match w.parse::<usize>() {
+                Ok(b) if b < bands => Ok(b),
+                _ => Err(format!(
+                    "--display-bands: `{w}` is not a band of this scene (its bands: {})",
+                    known()
+                )),
+            }
+        };
+        let words: Vec<&str> = spec.split(',').collect();
+        match words.as_slice() {
+            [one] => {
+                let b = band(one)?;
+                Ok(DisplayBands([b, b, b]))
+            }
+            [r, g, b] => Ok(DisplayBands([band(r)?, band(g)?, band(b)?])),
+            _ => Err(format!(
+                "--display-bands: expected one band (grey) or three (red,green,blue), found `{spec}`"
+            )),
+        }
+    }
+
+    /// `red = nir, green = par, blue = par`, or `grey = par`.
+    pub fn describe(&self, names: &[String]) -> String {
+        let name = |b: usize| match names.get(b).filter(|n| !n.is_empty()) {
+            Some(n) => n.clone(),
+            None => format!("band {b}"),
+        };
+        let [r, g, b] = self.0;
+        if r == g && g == b {
+            format!("grey = {}", name(r))
+        } else {
+            format!("red = {}, green = {}, blue = {}", name(r), name(g), name(b))
+        }
+    }
+
+    /// Linear display colour of one pixel.
+    fn rgb(&self, px: &[f32]) -> [f32; 3] {
+        self.0.map(|b| px.get(b).copied().unwrap_or(0.0))
     }
 }
 
@@ -32,13 +98,18 @@ fn luminance([r, g, b]: [f32; 3]) -> f32 {
 }
 
 /// The exposure scale: [`EXPOSURE_TARGET`] over the [`EXPOSURE_PERCENTILE`] luminance of the
-/// pixels with positive luminance; 1 when no pixel is lit.
+/// pixels with positive luminance; 1 when no pixel is lit. With the default display bands.
 pub fn exposure(frame: &Frame) -> f32 {
+    exposure_with(frame, DisplayBands::default_for(frame.channels.len()))
+}
+
+/// [`exposure`] with the given display bands.
+pub fn exposure_with(frame: &Frame, display: DisplayBands) -> f32 {
     let n = frame.channels.len().max(1);
     let mut lit: Vec<f32> = frame
         .data
         .chunks(n)
-        .map(|px| luminance(display_rgb(px)))
+        .map(|px| luminance(display.rgb(px)))
         .filter(|&l| l > 0.0 && l.is_finite())
         .collect();
     if lit.is_empty() {
@@ -59,13 +130,19 @@ pub fn srgb_encode(v: f32) -> f32 {
     }
 }
 
-/// 8-bit sRGB pixels (R, G, B, row by row from the top left) of the tone-mapped frame.
+/// 8-bit sRGB pixels (R, G, B, row by row from the top left) of the tone-mapped frame,
+/// with the default display bands.
 pub fn tone_map(frame: &Frame) -> Vec<u8> {
+    tone_map_with(frame, DisplayBands::default_for(frame.channels.len()))
+}
+
+/// [`tone_map`] with the given display bands.
+pub fn tone_map_with(frame: &Frame, display: DisplayBands) -> Vec<u8> {
     let n = frame.channels.len().max(1);
-    let scale = exposure(frame);
+    let scale = exposure_with(frame, display);
     let mut out = Vec::with_capacity(frame.data.len() / n * 3);
     for px in frame.data.chunks(n) {
-        for v in display_rgb(px) {
+        for v in display.rgb(px) {
             let linear = (v * scale).clamp(0.0, 1.0);
             // NaN clamps to NaN and casts to 0.
             out.push((srgb_encode(linear) * 255.0 + 0.5) as u8);
@@ -75,7 +152,7 @@ pub fn tone_map(frame: &Frame) -> Vec<u8> {
 }
 
 /// Writes the tone-mapped frame as an 8-bit RGB PNG marked as sRGB.
-pub fn write_png(frame: &Frame, out: impl Write) -> anyhow::Result<()> {
+pub fn write_png(frame: &Frame, display: DisplayBands, out: impl Write) -> anyhow::Result<()> {
     let mut encoder = png::Encoder::new(out, frame.width, frame.height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -84,7 +161,7 @@ pub fn write_png(frame: &Frame, out: impl Write) -> anyhow::Result<()> {
         .write_header()
         .map_err(|e| anyhow!("cannot write the PNG image: {e}"))?;
     writer
-        .write_image_data(&tone_map(frame))
+        .write_image_data(&tone_map_with(frame, display))
         .map_err(|e| anyhow!("cannot write the PNG image: {e}"))?;
     writer
         .finish()
