@@ -714,3 +714,101 @@ fn false_colour_is_explained_and_chosen() {
     );
     assert!(!d.join("x.png").exists());
 }
+
+/// Item 1: an OBJ room without a camera shows its walls at the default settings (the open
+/// side of the Cornell box as exporters write it; a closed room from inside), and a picture
+/// that comes out nearly black says why.
+#[test]
+fn default_pictures_show_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let share = |px: &[[u8; 3]], f: &dyn Fn(&[u8; 3]) -> bool| {
+        px.iter().filter(|p| f(p)).count() as f64 / px.len() as f64
+    };
+    // The Cornell box as 32 triangles: seen through its open side, red and green walls.
+    let png = d.join("box.png");
+    ok(&[
+        "solve",
+        s(&fixture("obj/cornell_triangles.obj")),
+        "--image",
+        s(&png),
+        "-q",
+    ]);
+    let px = png_pixels(&png);
+    assert!(
+        share(&px, &|p| p.iter().any(|&v| v > 20)) > 0.25,
+        "mostly black"
+    );
+    assert!(
+        share(&px, &|p| p[0] > 2 * p[1] && p[0] > 60) > 0.02,
+        "no red wall"
+    );
+    assert!(
+        share(&px, &|p| p[1] > 2 * p[0] && p[1] > 60) > 0.02,
+        "no green wall"
+    );
+    // The same box closed by a front wall: from inside.
+    let src = std::fs::read_to_string(fixture("obj/cornell_triangles.obj")).unwrap();
+    let vertices = src.lines().filter(|l| l.starts_with("v ")).count();
+    let closed = format!(
+        "{}\ng front\nusemtl white\nv 0.5528 0 0\nv 0.556 0.5488 0\nv 0 0.5488 0\nv 0 0 0\nf {} {} {}\nf {} {} {}\n",
+        src.replace(
+            "mtllib cornell_triangles.mtl",
+            &format!("mtllib {}", s(&fixture("obj/cornell_triangles.mtl")))
+        ),
+        vertices + 1,
+        vertices + 2,
+        vertices + 3,
+        vertices + 1,
+        vertices + 3,
+        vertices + 4
+    );
+    let obj = write(d, "closed.obj", &closed);
+    let png = d.join("closed.png");
+    ok(&[
+        "solve",
+        s(&obj),
+        "--image",
+        s(&png),
+        "--final-rays",
+        "0",
+        "--max-imbalance",
+        "100",
+        "-q",
+    ]);
+    let px = png_pixels(&png);
+    assert!(
+        share(&px, &|p| p.iter().any(|&v| v > 20)) > 0.5,
+        "a closed room from outside"
+    );
+    // A camera that looks away: the picture is black, and the run says why.
+    let png = d.join("away.png");
+    let out = hirad(&[
+        "solve",
+        s(&fixture("obj/cornell_triangles.obj")),
+        "--image",
+        s(&png),
+        "--camera",
+        "0.3,0.3,-2,0.3,0.3,-3,0,1,0,40",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("nearly black") && err.contains("--camera"),
+        "{err}"
+    );
+    // From outside the closed room: the backs of its walls are named.
+    let out = hirad(&[
+        "solve",
+        s(&obj),
+        "--image",
+        s(&d.join("out.png")),
+        "--camera",
+        "0.27,0.27,-2,0.27,0.27,0.27,0,1,0,40",
+        "--final-rays",
+        "0",
+        "--max-imbalance",
+        "100",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("backs of one-sided polygons"), "{err}");
+}

@@ -52,7 +52,9 @@ pub struct Args {
     #[arg(long)]
     pub image: Option<PathBuf>,
     /// Camera "px,py,pz,tx,ty,tz,ux,uy,uz,fovy_deg" (position, target, up, vertical field of
-    /// view); default: the scene's first camera, else a view of the whole scene.
+    /// view); default: the scene's first camera, else the view that shows most of the scene:
+    /// from around it (its corners and sides, from above and to the side when that shows as
+    /// much), or from inside a closed room. A picture that comes out nearly black says why.
     #[arg(long, allow_hyphen_values = true)]
     pub camera: Option<String>,
     /// Image size in pixels, WxH (default 640x480).
@@ -227,8 +229,9 @@ pub fn run(a: Args) -> Result<()> {
             Some(c) => output::parse_camera(c).map_err(|e| anyhow!("{e}"))?,
             None => match scene.cameras.first() {
                 Some(c) => c.clone(),
-                // OBJ files are y up by convention; hirad's own scenes default to z up.
-                None => output::default_camera_up(&output::scene_bounds(scene), size, y_up)
+                // OBJ files are y up by convention; hirad's own scenes default to z up. The
+                // view that shows most (see `output::view`), not the backs of walls.
+                None => output::view::choose(scene, &output::scene_bounds(scene), size, y_up)
                     .map_err(|e| anyhow!("{e}"))?,
             },
         };
@@ -389,6 +392,11 @@ pub fn run(a: Args) -> Result<()> {
         }
     }
     report.seconds = start.elapsed().as_secs_f64();
+    if !a.quiet
+        && let Some(why) = outputs.image.as_ref().and_then(|i| i.nearly_black())
+    {
+        eprintln!("warning: {why}");
+    }
     let comparison = outputs.finish()?;
     if let Some(c) = &comparison {
         report.set_comparison(c);

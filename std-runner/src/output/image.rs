@@ -91,6 +91,36 @@ impl ImageSink {
         self.raster.frame(self.channels.clone())
     }
 
+    /// What the image shows (see [`super::raster::Coverage`]).
+    pub fn coverage(&self) -> super::raster::Coverage {
+        self.raster.coverage()
+    }
+
+    /// Why the picture is nearly black, when less than 2% of it shows a lit surface.
+    pub fn nearly_black(&self) -> Option<String> {
+        let c = self.coverage();
+        if c.lit >= 0.02 {
+            return None;
+        }
+        let pct = |f: f64| format!("{:.1}%", 100.0 * f);
+        let mut why = format!(
+            "{} is nearly black: {} of it shows a lit surface",
+            self.path.display(),
+            pct(c.lit)
+        );
+        if c.backs > 0.0 {
+            why += &format!(
+                ", {} the backs of one-sided polygons (they absorb and show nothing: is the camera outside a closed room?)",
+                pct(c.backs)
+            );
+        }
+        if c.empty > 0.0 {
+            why += &format!(", {} nothing at all", pct(c.empty));
+        }
+        why += "; choose the view with --camera";
+        Some(why)
+    }
+
     /// Writes the file: a temporary name beside it, renamed into place when complete.
     pub fn finish(self) -> anyhow::Result<()> {
         let frame = self.frame();

@@ -17,6 +17,7 @@ pub mod reference;
 pub mod results;
 pub mod results_read;
 pub mod stats;
+pub mod view;
 
 pub use camera::{
     OptionError, Projection, Size, check_camera, default_camera, default_camera_up, parse_camera,

@@ -31,8 +31,23 @@ pub struct Rasterizer {
     inv_depth: Vec<f32>,
     /// Per sample: `bands` radiance values.
     radiance: Vec<f32>,
+    /// Per sample: the nearest patch shows the back of a one-sided polygon (black).
+    back: Vec<bool>,
     clipped: Vec<DVec3>,
     colour: Vec<f32>,
+    /// Whether the patch being drawn shows the back of a one-sided polygon.
+    drawing_back: bool,
+}
+
+/// What the samples of an image show, in fractions of them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coverage {
+    /// A surface with some light.
+    pub lit: f64,
+    /// The back of a one-sided polygon (which absorbs and shows nothing).
+    pub backs: f64,
+    /// Nothing at all (the background).
+    pub empty: f64,
 }
 
 impl Rasterizer {
@@ -78,8 +93,10 @@ impl Rasterizer {
             near: NEAR_REL * (camera.target - camera.position).as_dvec3().length(),
             inv_depth: vec![0.0; samples],
             radiance: vec![0.0; samples * bands],
+            back: vec![false; samples],
             clipped: Vec::new(),
             colour: vec![0.0; bands],
+            drawing_back: false,
         })
     }
 
@@ -114,6 +131,7 @@ impl Rasterizer {
         let towards_eye = self.projection.eye() - corners[0].as_dvec3();
         let side = usize::from(towards_eye.dot(normal.as_dvec3()) < 0.0);
         let values = radiosity[side];
+        self.drawing_back = side == 1 && values.is_empty();
         for (b, c) in self.colour.iter_mut().enumerate() {
             *c = values.get(b).map_or(0.0, |v| v / std::f32::consts::PI);
         }
@@ -197,6 +215,7 @@ impl Rasterizer {
                 if inv_z > self.inv_depth[at] {
                     self.inv_depth[at] = inv_z;
                     self.radiance[at * bands..(at + 1) * bands].copy_from_slice(&self.colour);
+                    self.back[at] = self.drawing_back;
                 }
             }
         }
@@ -238,6 +257,29 @@ impl Rasterizer {
     /// Bands per pixel.
     pub fn bands(&self) -> usize {
         self.bands
+    }
+
+    /// What the samples show so far.
+    pub fn coverage(&self) -> Coverage {
+        let n = self.inv_depth.len().max(1) as f64;
+        let (mut lit, mut backs, mut empty) = (0usize, 0usize, 0usize);
+        for (at, &d) in self.inv_depth.iter().enumerate() {
+            if d <= 0.0 {
+                empty += 1;
+            } else if self.back[at] {
+                backs += 1;
+            } else if self.radiance[at * self.bands..(at + 1) * self.bands]
+                .iter()
+                .any(|&v| v > 0.0)
+            {
+                lit += 1;
+            }
+        }
+        Coverage {
+            lit: lit as f64 / n,
+            backs: backs as f64 / n,
+            empty: empty as f64 / n,
+        }
     }
 }
 
