@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 /// Arguments of `hirad convert`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad convert model.obj -o model.hirb     # import once, load fast\n  hirad convert poplar.hirb -o poplar.hir   # the text form, to read or edit\n  hirad convert room.hirb -o room.obj       # every instance expanded, with room.mtl"
+    after_help = "Examples:\n  hirad convert model.obj -o model.hirb     # import once, load fast\n  hirad convert poplar.hirb -o poplar.hir   # the text form, to read or edit\n  hirad convert room.hirb -o room.obj       # expanded, room.mtl beside it"
 )]
 pub struct Args {
     /// Input scene (.hir, .hirb or .obj).

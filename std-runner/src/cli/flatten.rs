@@ -8,7 +8,7 @@ use std::time::Instant;
 /// Arguments of `hirad flatten`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad flatten fixtures/chair_room.hir -o room.obj\n  hirad flatten poplar.hirb -o poplar.obj -q   # face k of poplar.obj is row k-1 of the results"
+    after_help = "Examples:\n  hirad flatten fixtures/chair_room.hir -o room.obj\n  hirad flatten poplar.hirb -o poplar.obj -q   # face k: results row k-1"
 )]
 pub struct Args {
     /// Input scene (.hir, .hirb or .obj).

@@ -23,7 +23,7 @@ pub enum Method {
 /// Arguments of `hirad solve`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad solve fixtures/chair_room.hir --results room.csv --image room.png\n  hirad solve model.obj --epsilon 1e-4 --stats run.json   # finer and slower\n  hirad solve model.obj --method exact --results ref.csv && hirad solve model.obj --reference ref.csv"
+    after_help = "Examples:\n  hirad solve fixtures/chair_room.hir --results room.csv --image room.png\n  hirad solve model.obj --epsilon 1e-4 --stats run.json   # finer and slower\n  hirad solve model.obj --reference ref.csv   # ref.csv: from --method exact"
 )]
 pub struct Args {
     /// Scene file (.hir, .hirb or .obj).

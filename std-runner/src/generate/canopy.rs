@@ -40,7 +40,7 @@ pub enum Crop {
 /// Arguments of `hirad gen canopy`.
 #[derive(clap::Args, Debug, Clone)]
 #[command(
-    after_help = "Examples:\n  hirad gen canopy -o maize.hirb                  # 24 rows of 100 maize plants\n  hirad gen canopy --crop wheat --rows 6 --plants-per-row 20 -o wheat.hirb\n  hirad gen canopy --rows 2 --plants-per-row 2 -o small.hir && hirad solve small.hir --results small.csv"
+    after_help = "Examples:\n  hirad gen canopy -o maize.hirb                # 24 rows of 100 maize plants\n  hirad gen canopy --crop wheat --rows 6 --plants-per-row 20 -o wheat.hirb\n  hirad gen canopy --rows 2 --plants-per-row 2 -o small.hir"
 )]
 pub struct Args {
     /// The crop.

@@ -24,7 +24,7 @@ use terrain::Terrain;
 /// Arguments of `hirad gen forest`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad gen forest --trees 1000 -o forest.hirb   # ~1 billion polygons in 1.5 MB\n  hirad gen forest --trees 10 -o grove.hirb && hirad info grove.hirb"
+    after_help = "Examples:\n  hirad gen forest --trees 1000 -o forest.hirb  # ~1 billion polygons, 1.5 MB\n  hirad gen forest --trees 10 -o grove.hirb && hirad info grove.hirb"
 )]
 pub struct Args {
     /// Seed, output and summary.

@@ -38,7 +38,7 @@ impl Preset {
 /// Arguments of `hirad gen poplar`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad gen poplar --preset paper -o poplar.hirb   # ~119,000 polygons, as in the paper\n  hirad gen poplar --seed 7 -o poplar7.hir"
+    after_help = "Examples:\n  hirad gen poplar --preset paper -o poplar.hirb  # ~119,000 polygons\n  hirad gen poplar --seed 7 -o poplar7.hir"
 )]
 pub struct Args {
     /// Seed, output and summary.
