@@ -4,41 +4,16 @@
 
 use glam::Vec3;
 use hirad::output::ResultsTable;
-use hirad::scene::{Scene, read_image};
-use hirad::solve::{RayonExecutor, world_polygons};
-use hirad::visibility::ObvhsVisibility;
+use hirad::scene::Scene;
 use hirad_core::formfactor::point_polygon;
-use hirad_core::hr::{self, NoProgress, Progress, Settings, SolveError, Stats};
+use hirad_core::hr::{NoProgress, Progress, Settings, Stats};
 
 fn solve_with<P: Progress>(
     scene: &Scene,
     settings: &Settings,
     progress: &mut P,
 ) -> (ResultsTable, Stats) {
-    let bytes = hirad::scene::compile(scene).unwrap();
-    let view = read_image(&bytes).unwrap();
-    let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
-    let plan = hr::plan(&view, settings, false, &mut scratch).unwrap();
-    let mut ws = vec![0u8; plan.suggested_bytes as usize];
-    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
-    let mut table = ResultsTable::new(scene.bands as usize, two_sided);
-    let vis = ObvhsVisibility::new(&world_polygons(scene)).unwrap();
-    let mut exec = RayonExecutor::new(2).unwrap();
-    let stats = hr::solve(
-        &view,
-        settings,
-        &mut ws,
-        Some(&vis),
-        &mut exec,
-        progress,
-        &mut table,
-    )
-    .map_err(|e| match e {
-        SolveError::Hr(h) => h,
-        SolveError::Sink(_) => unreachable!("the table never refuses"),
-    })
-    .unwrap();
-    (table, stats)
+    hirad_tests::solve_hr(scene, settings, progress).unwrap()
 }
 
 fn solve(scene: &Scene, settings: &Settings) -> (ResultsTable, Stats) {

@@ -5,10 +5,10 @@
 
 use hirad::exact::{ExactSettings, solve_exact_obvhs};
 use hirad::output::ResultsTable;
-use hirad::scene::{Scene, read_image};
-use hirad::solve::{RayonExecutor, world_polygons};
+use hirad::scene::Scene;
+use hirad::solve::world_polygons;
 use hirad::visibility::ObvhsVisibility;
-use hirad_core::hr::{self, HrError, NoProgress, Settings, SolveError, Stats};
+use hirad_core::hr::{HrError, NoProgress, Settings, Stats};
 use hirad_core::sampling::{hash3, unit2};
 use hirad_core::visibility::Visibility;
 
@@ -17,29 +17,7 @@ fn parse(text: &str) -> Scene {
 }
 
 fn solve(scene: &Scene, settings: &Settings) -> Result<(ResultsTable, Stats), HrError> {
-    let bytes = hirad::scene::compile(scene).unwrap();
-    let view = read_image(&bytes).unwrap();
-    let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
-    let plan = hr::plan(&view, settings, false, &mut scratch)?;
-    let mut ws = vec![0u8; plan.suggested_bytes as usize];
-    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
-    let mut table = ResultsTable::new(scene.bands as usize, two_sided);
-    let vis = ObvhsVisibility::new(&world_polygons(scene)).unwrap();
-    let mut exec = RayonExecutor::new(2).unwrap();
-    let stats = hr::solve(
-        &view,
-        settings,
-        &mut ws,
-        Some(&vis),
-        &mut exec,
-        &mut NoProgress,
-        &mut table,
-    )
-    .map_err(|e| match e {
-        SolveError::Hr(h) => h,
-        SolveError::Sink(_) => unreachable!("the table never refuses"),
-    })?;
-    Ok((table, stats))
+    hirad_tests::solve_hr(scene, settings, &mut NoProgress)
 }
 
 fn exact(scene: &Scene, elements: usize) -> ResultsTable {

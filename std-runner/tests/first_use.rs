@@ -11,6 +11,24 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     p
 }
 
+/// A maize field of `rows` x `plants` plants (two bands, sun and sky) in `dir`.
+fn canopy(dir: &Path, rows: u32, plants: u32) -> std::path::PathBuf {
+    let scene = dir.join("field.hirb");
+    let (rows, plants) = (rows.to_string(), plants.to_string());
+    ok(&[
+        "gen",
+        "canopy",
+        "--rows",
+        &rows,
+        "--plants-per-row",
+        &plants,
+        "-q",
+        "-o",
+        s(&scene),
+    ]);
+    scene
+}
+
 /// Item 2: a run that succeeded says no line that starts with "error:".
 #[test]
 fn a_successful_run_reports_no_error() {
@@ -232,128 +250,42 @@ fn outputs_never_clobber_inputs_or_each_other() {
     let reference = d.join("ref.csv");
     ok(&["solve", s(&scene), "--results", s(&reference), "-q"]);
     let p = |name: &str| d.join(name);
-    let cases: Vec<(Vec<String>, &str)> = vec![
+    let c = |args: &[&str], want: &'static str| -> (Vec<String>, &'static str) {
+        (args.iter().map(|a| a.to_string()).collect(), want)
+    };
+    let (sc, ob, rf) = (s(&scene), s(&obj), s(&reference));
+    let reads = "a file the run reads";
+    let (same, absent) = ("name the same file", "does not exist");
+    let (a, x, r) = (p("a.png"), p("x.json"), p("r.csv"));
+    let (a_png, x_json, r_csv) = (s(&a), s(&x), s(&r));
+    let x_json_too = format!("{}/./x.json", d.display());
+    let (mp, mj, mh) = (p("nodir/x.png"), p("nodir/x.json"), p("nodir/room.hirb"));
+    let (missing_png, missing_json, missing_hirb) = (s(&mp), s(&mj), s(&mh));
+    let cases = [
         // The scene itself, the OBJ's material library, the reference.
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--results".into(),
-                s(&scene).into(),
-            ],
-            "a file the run reads",
-        ),
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--stats".into(),
-                s(&scene).into(),
-            ],
-            "a file the run reads",
-        ),
-        (
-            vec![
-                "solve".into(),
-                s(&obj).into(),
-                "--image".into(),
-                s(&p("cube.mtl")).into(),
-            ],
-            "a file the run reads",
-        ),
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--reference".into(),
-                s(&reference).into(),
-                "--results".into(),
-                s(&reference).into(),
-            ],
-            "a file the run reads",
-        ),
-        (
-            vec![
-                "convert".into(),
-                s(&scene).into(),
-                "-o".into(),
-                s(&scene).into(),
-            ],
-            "a file the run reads",
-        ),
-        (
-            vec![
-                "flatten".into(),
-                s(&obj).into(),
-                "-o".into(),
-                s(&obj).into(),
-            ],
-            "a file the run reads",
-        ),
+        c(&["solve", sc, "--results", sc], reads),
+        c(&["solve", sc, "--stats", sc], reads),
+        c(&["solve", ob, "--image", s(&p("cube.mtl"))], reads),
+        c(&["solve", sc, "--reference", rf, "--results", rf], reads),
+        c(&["convert", sc, "-o", sc], reads),
+        c(&["flatten", ob, "-o", ob], reads),
         // One output over another.
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--results".into(),
-                s(&p("a.png")).into(),
-                "--image".into(),
-                s(&p("a.png")).into(),
-            ],
-            "name the same file",
-        ),
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--results".into(),
-                s(&p("x.json")).into(),
-                "--stats".into(),
-                format!("{}/./x.json", d.display()),
-            ],
-            "name the same file",
+        c(&["solve", sc, "--results", a_png, "--image", a_png], same),
+        c(
+            &["solve", sc, "--results", x_json, "--stats", &x_json_too],
+            same,
         ),
         // Folders that are not there, found before the solve.
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--results".into(),
-                s(&p("r.csv")).into(),
-                "--image".into(),
-                s(&p("nodir/x.png")).into(),
-            ],
-            "does not exist",
+        c(
+            &["solve", sc, "--results", r_csv, "--image", missing_png],
+            absent,
         ),
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--results".into(),
-                s(&p("r.csv")).into(),
-                "--stats".into(),
-                s(&p("nodir/x.json")).into(),
-            ],
-            "does not exist",
+        c(
+            &["solve", sc, "--results", r_csv, "--stats", missing_json],
+            absent,
         ),
-        (
-            vec![
-                "gen".into(),
-                "room".into(),
-                "-o".into(),
-                s(&p("nodir/room.hirb")).into(),
-            ],
-            "does not exist",
-        ),
-        (
-            vec![
-                "solve".into(),
-                s(&scene).into(),
-                "--results".into(),
-                s(d).into(),
-            ],
-            "is a directory",
-        ),
+        c(&["gen", "room", "-o", missing_hirb], absent),
+        c(&["solve", sc, "--results", s(d)], "is a directory"),
     ];
     for (args, want) in &cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -396,18 +328,7 @@ fn an_interrupted_solve_leaves_nothing_behind() {
     use std::process::{Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = d.join("field.hirb");
-    ok(&[
-        "gen",
-        "canopy",
-        "--rows",
-        "6",
-        "--plants-per-row",
-        "10",
-        "-q",
-        "-o",
-        s(&scene),
-    ]);
+    let scene = canopy(d, 6, 10);
     let old = d.join("r.csv");
     std::fs::write(&old, "an older table\n").unwrap();
     let listing = || {
@@ -540,18 +461,7 @@ fn results_keep_the_obj_face_number() {
 #[test]
 fn progress_moves_forward_to_the_end() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("field.hirb");
-    ok(&[
-        "gen",
-        "canopy",
-        "--rows",
-        "2",
-        "--plants-per-row",
-        "4",
-        "-q",
-        "-o",
-        s(&scene),
-    ]);
+    let scene = canopy(dir.path(), 2, 4);
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
         .args(["solve", s(&scene), "--max-imbalance", "100"])
         .env("HIRAD_PROGRESS", "every")
@@ -650,18 +560,7 @@ fn png_pixels(path: &Path) -> Vec<[u8; 3]> {
 fn false_colour_is_explained_and_chosen() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = d.join("field.hirb");
-    ok(&[
-        "gen",
-        "canopy",
-        "--rows",
-        "1",
-        "--plants-per-row",
-        "2",
-        "-q",
-        "-o",
-        s(&scene),
-    ]);
+    let scene = canopy(d, 1, 2);
     let run = |extra: &[&str], png: &Path| {
         let mut args = vec![
             "solve",

@@ -1,8 +1,45 @@
 //! Helpers shared by the integration tests in `tests/`.
 
+use hirad::output::ResultsTable;
+use hirad::scene::{Scene, read_image};
+use hirad::solve::{RayonExecutor, world_polygons};
+use hirad::visibility::ObvhsVisibility;
+use hirad_core::hr::{self, HrError, Progress, Settings, SolveError, Stats};
 use std::path::PathBuf;
 
 pub mod sample;
+
+/// Solves `scene` with the hierarchical solver as `hirad solve` does (obvhs visibility, two
+/// threads, the planner's suggested workspace), into a results table.
+pub fn solve_hr<P: Progress>(
+    scene: &Scene,
+    settings: &Settings,
+    progress: &mut P,
+) -> Result<(ResultsTable, Stats), HrError> {
+    let bytes = hirad::scene::compile(scene).unwrap();
+    let view = read_image(&bytes).unwrap();
+    let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
+    let plan = hr::plan(&view, settings, false, &mut scratch)?;
+    let mut ws = vec![0u8; plan.suggested_bytes as usize];
+    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
+    let mut table = ResultsTable::new(scene.bands as usize, two_sided);
+    let vis = ObvhsVisibility::new(&world_polygons(scene)).unwrap();
+    let mut exec = RayonExecutor::new(2).unwrap();
+    let stats = hr::solve(
+        &view,
+        settings,
+        &mut ws,
+        Some(&vis),
+        &mut exec,
+        progress,
+        &mut table,
+    )
+    .map_err(|e| match e {
+        SolveError::Hr(h) => h,
+        SolveError::Sink(_) => unreachable!("the table never refuses"),
+    })?;
+    Ok((table, stats))
+}
 
 /// Path of a file in `fixtures/`.
 pub fn fixture(name: &str) -> PathBuf {
