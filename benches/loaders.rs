@@ -116,7 +116,7 @@ fn parse_text_90k_polygons(b: divan::Bencher) {
 fn import_obj_90k_polygons(b: divan::Bencher) {
     let scene = many_rooms(ROOMS);
     let (mut obj, mut mtl) = (Vec::new(), Vec::new());
-    hirad::obj::export(&scene, "rooms.mtl", &mut obj, &mut mtl).unwrap();
+    hirad::obj::export(&scene, hirad::scene::Up::Y, "rooms.mtl", &mut obj, &mut mtl).unwrap();
     b.counter(divan::counter::BytesCount::new(obj.len()))
         .bench(|| {
             let mut load = |_: &str| Ok(mtl.clone());

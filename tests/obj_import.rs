@@ -6,7 +6,7 @@ use glam::{Quat, Vec3};
 use hirad::obj::{self, ObjError, ObjImport};
 use hirad::scene::{
     Cluster, ExpandVisitor, ExpandedNode, InstanceOf, Material, MaterialData, Original, Scene,
-    Similarity, compile, expand, quad, triangle,
+    Similarity, Up, compile, expand, quad, triangle,
 };
 use hirad_core::geometry::polygon_shape;
 use hirad_tests::fixture;
@@ -88,7 +88,7 @@ fn faces(scene: &Scene) -> Vec<Face> {
 /// Exports `scene` and imports the result again.
 fn round_trip(scene: &Scene) -> (ObjImport, obj::ObjExport, String) {
     let (mut o, mut m) = (Vec::new(), Vec::new());
-    let e = obj::export(scene, "out.mtl", &mut o, &mut m).unwrap();
+    let e = obj::export(scene, Up::Y, "out.mtl", &mut o, &mut m).unwrap();
     let (o, m) = (String::from_utf8(o).unwrap(), String::from_utf8(m).unwrap());
     let r = import_with(&o, &[("out.mtl", &m)]).unwrap_or_else(|e| panic!("{e}\n{o}"));
     compile(&r.scene).unwrap();
@@ -537,7 +537,7 @@ fn export_writes_through_files() {
     let (op, mp) = (dir.path().join("flat.obj"), dir.path().join("flat.mtl"));
     let mut o = std::fs::File::create(&op).unwrap();
     let mut m = std::fs::File::create(&mp).unwrap();
-    obj::export(&s, "flat.mtl", &mut o, &mut m).unwrap();
+    obj::export(&s, Up::Y, "flat.mtl", &mut o, &mut m).unwrap();
     drop((o, m));
     let bytes = std::fs::read(&op).unwrap();
     let r = obj::import(&bytes, &mut obj::load_mtl_from(Path::new(dir.path()))).unwrap();

@@ -130,6 +130,8 @@ pub struct Loaded {
     /// For an OBJ, the face number (1-based) each polygon came from, in global-id order
     /// (see `obj::ObjImport::faces`); `None` for other formats.
     pub faces: Option<Vec<u64>>,
+    /// The scene's up axis: +y for an OBJ (the convention), else `scene::Up::of_scene`.
+    pub up: scene::Up,
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -187,7 +189,12 @@ pub fn load_scene(path: &Path) -> Result<Loaded> {
             imported.scene
         }
     };
+    let up = match format {
+        Format::Obj => scene::Up::Y,
+        _ => scene::Up::of_scene(&scene),
+    };
     Ok(Loaded {
+        up,
         scene,
         format,
         warnings,

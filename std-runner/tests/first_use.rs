@@ -715,3 +715,87 @@ fn default_pictures_show_the_scene() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("backs of one-sided polygons"), "{err}");
 }
+
+/// Item 1, its sibling: a scene keeps its up through OBJ. hirad's scenes are z up, OBJ files
+/// y up: `flatten` turns one into the other (and says so), `convert` turns an OBJ back, and
+/// the default view of the OBJ is upright (the lamps on the ceiling at the top of the
+/// picture; before, the flattened room was read lying on its side). `--up` names another
+/// axis, checked.
+#[test]
+fn a_scene_keeps_its_up_through_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let room = d.join("room.hirb");
+    ok(&[
+        "gen",
+        "room",
+        "--chairs",
+        "0",
+        "--tables",
+        "0",
+        "--orchids",
+        "0",
+        "--plants",
+        "1",
+        "-q",
+        "-o",
+        s(&room),
+    ]);
+    let obj = d.join("room.obj");
+    let out = hirad(&["flatten", s(&room), "-o", s(&obj)]);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("+z axis is written as +y"), "{err}");
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(text.contains("# The scene's +z axis is written as +y"));
+    // Upright: the saturated pixels (the ceiling's lamp panels) in the picture's top half.
+    let png = d.join("room.png");
+    ok(&[
+        "solve",
+        s(&obj),
+        "--image",
+        s(&png),
+        "--size",
+        "160x120",
+        "-q",
+    ]);
+    let px = png_pixels(&png);
+    let lamps: Vec<usize> = (0..px.len())
+        .filter(|&i| px[i].iter().all(|&v| v >= 250))
+        .collect();
+    let top = lamps.iter().filter(|&&i| i / 160 < 60).count();
+    assert!(lamps.len() > 20, "{} lamp pixels", lamps.len());
+    assert!(
+        top * 10 >= lamps.len() * 9,
+        "{top} of {} lamp pixels in the top half",
+        lamps.len()
+    );
+    // Back to z up: the same coordinates as the scene it came from.
+    let back = d.join("back.hir");
+    let err =
+        String::from_utf8_lossy(&hirad(&["convert", s(&obj), "-o", s(&back)]).stderr).into_owned();
+    assert!(err.contains("+y axis becomes +z"), "{err}");
+    let again = d.join("again.obj");
+    ok(&["flatten", s(&back), "-o", s(&again), "-q"]);
+    let vertices = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .filter(|l| l.starts_with("v "))
+            .map(String::from)
+            .collect()
+    };
+    assert_eq!(vertices(&again), vertices(&obj));
+    // Another axis, named; a wrong one refused with the choices; one with no effect warned.
+    let side = d.join("side.obj");
+    ok(&["flatten", s(&room), "-o", s(&side), "--up", "-x", "-q"]);
+    let first = |p: &Path| vertices(p).into_iter().nth(1).unwrap();
+    assert_ne!(first(&side), first(&obj));
+    let out = hirad(&["flatten", s(&room), "-o", s(&side), "--up", "w"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("not an axis") && err.contains("-z"), "{err}");
+    let out = hirad(&["solve", s(&obj), "--up", "y", "--final-rays", "0"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--up has no effect without --image"), "{err}");
+}

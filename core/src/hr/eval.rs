@@ -103,6 +103,11 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
         ..Coefficients::default()
     };
     let seed = hash3(recv.0, emit.0, 0x11AD);
+    // The direction in which the gather takes an emitting cluster's radiance (see
+    // `oriented::radiosity_towards`): its kernel is scaled by its projected area that way, so
+    // that kernel x emission is the box's form factor x the radiance it sends that way.
+    let towards = (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit))
+        .normalize_or_zero();
     match r {
         Shape::Patch {
             corners,
@@ -133,8 +138,9 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
                 for side in 0..recv_sides(&r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
-                    let (contrib, open, s_side) =
-                        to_point(st, ws, x, nr, poly, &e, emit, qs, rays, vis, &mut out);
+                    let (contrib, open, s_side) = to_point(
+                        st, ws, x, nr, poly, &e, emit, towards, qs, rays, vis, &mut out,
+                    );
                     out.open += plain[q] * open;
                     if w == 0.0 {
                         continue;
@@ -167,7 +173,7 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
             for k in 0..rays {
                 let (x, px) = point_in(st, ws, recv, hash3(seed, k, 0xC1));
                 let (f, open, s_side, v, d) =
-                    flux_at(st, ws, x, px, &e, emit, hash3(seed, k, 0xE1), vis);
+                    flux_at(st, ws, x, px, &e, emit, towards, hash3(seed, k, 0xE1), vis);
                 out.rays += (f > 0.0 || open > 0.0) as u32;
                 out.open += inv * open;
                 let turned_away = at.is_some_and(|c| {
@@ -366,6 +372,7 @@ fn to_point<V: Visibility + ?Sized>(
     poly: u32,
     e: &Shape,
     emit: Elem,
+    towards: Vec3,
     seed: u32,
     rays: u32,
     vis: &V,
@@ -426,8 +433,7 @@ fn to_point<V: Visibility + ?Sized>(
             // The cluster as a volume of uniform radiance filling its box: its kernel is the
             // box's form factor over its projected area (exact for a flat cluster such as a
             // tiled soil, the point kernel far away, bounded close by).
-            let w = (x - (min + max) * 0.5).normalize_or_zero();
-            let projected = box_projected_area(min, max, w);
+            let projected = kernel_projection(x, min, max, towards);
             let ff = box_form_factor(x, nr, min, max);
             if projected <= 0.0 || ff <= 0.0 {
                 return (0.0, 0.0, 0);
@@ -490,6 +496,7 @@ fn flux_at<V: Visibility + ?Sized>(
     px: u32,
     e: &Shape,
     emit: Elem,
+    towards: Vec3,
     seed: u32,
     vis: &V,
 ) -> (f32, f32, usize, f32, Vec3) {
@@ -536,8 +543,7 @@ fn flux_at<V: Visibility + ?Sized>(
         Shape::Cluster { area, min, max } if outside(x, min, max) => {
             // As to a patch (see `to_point`), with the box's solid angle and vector form
             // factor.
-            let w = (x - (min + max) * 0.5).normalize_or_zero();
-            let projected = box_projected_area(min, max, w);
+            let projected = kernel_projection(x, min, max, towards);
             let (omega, phi) = box_light(x, min, max);
             if projected <= 0.0 || omega <= 0.0 {
                 return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
@@ -560,4 +566,25 @@ fn flux_at<V: Visibility + ?Sized>(
             (1.0, 1.0, 0, v, towards)
         }
     }
+}
+
+/// The projected area (m^2) by which an emitting cluster's box kernel is scaled at the point
+/// `x` outside it: the box's shadow along `towards`, the direction in which the gather takes
+/// the cluster's radiance (from its centre to the receiver's), so that kernel x emission is
+/// the box's form factor at `x` times the radiance the cluster sends that way (for a uniform
+/// flat cluster, its radiosity: exact). Taking the direction to `x` instead, a point near a
+/// large flat cluster's edge, seen almost edge-on from its centre, had its kernel divided by
+/// a nearly empty shadow while the emission stayed that of the receiver's centre: a floor
+/// gave the skirting along a room's walls 45 times its light, and the solution diverged.
+/// The shadow is kept to at least a thousandth of the box's largest face (a link along a
+/// flat cluster's plane then takes less light than it should, never more).
+fn kernel_projection(x: Vec3, min: Vec3, max: Vec3, towards: Vec3) -> f32 {
+    let w = if towards == Vec3::ZERO {
+        (x - (min + max) * 0.5).normalize_or_zero()
+    } else {
+        towards
+    };
+    let d = max - min;
+    let largest = (d.y * d.z).max(d.x * d.z).max(d.x * d.y);
+    box_projected_area(min, max, w).max(1e-3 * largest)
 }

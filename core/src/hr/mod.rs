@@ -207,6 +207,12 @@ pub enum HrError {
         /// Global id of the polygon.
         polygon: u64,
     },
+    /// The solution diverged: a radiosity grew without bound (a defect of the solver, since
+    /// every checked scene absorbs some light). Nothing is written.
+    Diverged {
+        /// Iterations run when it was found.
+        iterations: u64,
+    },
     /// The scene has no steady state in a band: it is closed (no light leaves it), nothing
     /// in it absorbs that band, and something emits it.
     NoSteadyState {
@@ -243,6 +249,10 @@ impl core::fmt::Display for HrError {
             HrError::NoSteadyState { band } => write!(
                 f,
                 "no steady state in band {band}: the scene is closed (no light leaves it), every surface reflects or transmits all of that band, and light is emitted in it, so its radiosity would grow without bound (give some surface a reflectance below 1, or open the scene)"
+            ),
+            HrError::Diverged { iterations } => write!(
+                f,
+                "the solution diverged after {iterations} iterations (a radiosity grew without bound), so nothing was written; this is a solver defect: please report the scene"
             ),
             HrError::BadGeometry { polygon } => {
                 write!(
@@ -625,6 +635,12 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         sink: &mut K,
     ) -> Result<Stats, SolveError<K::Error>> {
         let (st, ws) = (&mut self.st, &mut *self.ws);
+        if st.stats.diverged {
+            // Radiosities without bound: no sink would take them, and none mean anything.
+            return Err(SolveError::Hr(HrError::Diverged {
+                iterations: st.stats.iterations,
+            }));
+        }
         st.stats.links = st.links.live() as u64;
         st.stats.clusters = st.clusters as u64;
         st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;

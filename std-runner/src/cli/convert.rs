@@ -18,6 +18,12 @@ pub struct Args {
     /// is the expanded scene (OBJ has no instances), with its materials in the .mtl beside it.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// The input's up axis (x, y, z, -x, -y, -z). Default: y for an OBJ (the convention),
+    /// else the first camera's up, else the sky's zenith, else z. An .obj output is written
+    /// y up and a .hir/.hirb output from an OBJ z up, as hirad's scenes are (see docs/obj.md);
+    /// between .hir and .hirb the scene is turned only when this is given.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::parse_up)]
+    pub up: Option<crate::scene::Up>,
     /// Do not print warnings or progress.
     #[arg(long, short)]
     pub quiet: bool,
@@ -26,9 +32,22 @@ pub struct Args {
 /// Runs `hirad convert`.
 pub fn run(a: Args) -> Result<()> {
     let out_format = Format::of(&a.output)?;
-    let loaded = files::load_scene(&a.scene)?;
+    let mut loaded = files::load_scene(&a.scene)?;
     check_scene_outputs(&loaded.inputs, &a.output, out_format)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
+    let up = a.up.unwrap_or(loaded.up);
+    if out_format != Format::Obj
+        && (a.up.is_some() || loaded.format == Format::Obj)
+        && up != crate::scene::Up::Z
+    {
+        up.rotate_scene_to_z_up(&mut loaded.scene);
+        if !a.quiet {
+            eprintln!(
+                "note: the scene's {} axis becomes +z, as in hirad's own scenes",
+                up.name()
+            );
+        }
+    }
     match out_format {
         Format::Text => {
             // Compiling checks the scene, so a .hir output always reads back.
@@ -41,7 +60,7 @@ pub fn run(a: Args) -> Result<()> {
             files::write_atomic(&a.output, |w| Ok(w.write_all(&bytes)?))?;
         }
         Format::Obj => {
-            let stats = write_obj(&a.scene, &loaded.scene, &a.output, a.quiet)?;
+            let stats = write_obj(&a.scene, &loaded.scene, up, &a.output, a.quiet)?;
             super::warn_all(&stats.warnings, stats.warnings.len() as u64, a.quiet);
         }
     }
@@ -74,6 +93,7 @@ pub(crate) fn check_scene_outputs(inputs: &[PathBuf], output: &Path, format: For
 pub(crate) fn write_obj(
     input: &Path,
     scene: &crate::scene::Scene,
+    up: crate::scene::Up,
     out: &Path,
     quiet: bool,
 ) -> Result<crate::obj::ObjExport> {
@@ -92,7 +112,13 @@ pub(crate) fn write_obj(
         quiet,
     );
     let mut mtl_w = std::io::BufWriter::new(mtl_tmp.as_file());
-    let stats = crate::obj::export(scene, &mtl_name, &mut obj_w, &mut mtl_w)
+    if up != crate::scene::Up::Y && !quiet {
+        eprintln!(
+            "note: the scene's {} axis is written as +y, the OBJ convention",
+            up.name()
+        );
+    }
+    let stats = crate::obj::export(scene, up, &mtl_name, &mut obj_w, &mut mtl_w)
         .with_context(|| format!("{}: cannot write", out.display()))?;
     obj_w
         .flush()

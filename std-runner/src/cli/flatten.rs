@@ -8,7 +8,7 @@ use std::time::Instant;
 /// Arguments of `hirad flatten`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad flatten fixtures/chair_room.hir -o room.obj\n  hirad flatten poplar.hirb -o poplar.obj -q   # face k: results row k-1"
+    after_help = "Examples:\n  hirad flatten fixtures/chair_room.hir -o room.obj\n  hirad flatten poplar.hirb -o poplar.obj -q   # face k: results row k-1\n  hirad flatten cad.obj --up z -o upright.obj  # a z-up OBJ, written y up"
 )]
 pub struct Args {
     /// Input scene (.hir, .hirb or .obj).
@@ -17,6 +17,10 @@ pub struct Args {
     /// global id k-1.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// The input's up axis (x, y, z, -x, -y, -z), written as +y (the OBJ convention).
+    /// Default: y for an OBJ, else the first camera's up, else the sky's zenith, else z.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::parse_up)]
+    pub up: Option<crate::scene::Up>,
     /// Do not print warnings, progress or the summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -34,7 +38,13 @@ pub fn run(a: Args) -> Result<()> {
     let loaded = files::load_scene(&a.scene)?;
     super::convert::check_scene_outputs(&loaded.inputs, &a.output, files::Format::Obj)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
-    let stats = super::convert::write_obj(&a.scene, &loaded.scene, &a.output, a.quiet)?;
+    let stats = super::convert::write_obj(
+        &a.scene,
+        &loaded.scene,
+        a.up.unwrap_or(loaded.up),
+        &a.output,
+        a.quiet,
+    )?;
     super::warn_all(&stats.warnings, stats.warnings.len() as u64, a.quiet);
     if !a.quiet {
         eprintln!(

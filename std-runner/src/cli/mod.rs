@@ -107,6 +107,12 @@ fn joined_negative_values(args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsStri
     out
 }
 
+/// Parses `--up`: a signed axis (`x`, `y`, `z`, `-x`, `-y`, `-z`).
+pub(crate) fn parse_up(s: &str) -> Result<crate::scene::Up, String> {
+    crate::scene::Up::parse(s)
+        .ok_or_else(|| format!("'{s}' is not an axis: give x, y, z, -x, -y or -z"))
+}
+
 /// Writes `text` to standard output. A closed pipe (`hirad info x | head -1`) ends the output
 /// quietly instead of failing.
 pub fn print_out(text: &str) -> anyhow::Result<()> {

@@ -57,6 +57,10 @@ pub struct Args {
     /// much), or from inside a closed room. A picture that comes out nearly black says why.
     #[arg(long, allow_hyphen_values = true)]
     pub camera: Option<String>,
+    /// The scene's up axis for the default view: x, y, z, -x, -y or -z. Default: y for an OBJ
+    /// (the convention), else the first camera's up, else the sky's zenith, else z.
+    #[arg(long, allow_hyphen_values = true, value_parser = super::parse_up)]
+    pub up: Option<crate::scene::Up>,
     /// Image size in pixels, WxH (default 640x480).
     #[arg(long)]
     pub size: Option<String>,
@@ -167,7 +171,7 @@ pub fn run(a: Args) -> Result<()> {
     warn_unused(&a);
     let loaded = files::load_scene(&a.scene)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
-    let y_up = loaded.format == files::Format::Obj;
+    let up = a.up.unwrap_or(loaded.up);
     let scene = &loaded.scene;
     let bytes = files::compile(&a.scene, scene)?;
     let info = *crate::scene::read_image(&bytes)
@@ -228,10 +232,17 @@ pub fn run(a: Args) -> Result<()> {
         let camera = match &a.camera {
             Some(c) => output::parse_camera(c).map_err(|e| anyhow!("{e}"))?,
             None => match scene.cameras.first() {
-                Some(c) => c.clone(),
-                // OBJ files are y up by convention; hirad's own scenes default to z up. The
-                // view that shows most (see `output::view`), not the backs of walls.
-                None => output::view::choose(scene, &output::scene_bounds(scene), size, y_up)
+                Some(c) => {
+                    if a.up.is_some() && !a.quiet {
+                        eprintln!(
+                            "warning: --up has no effect: the scene's first camera gives the view and its up"
+                        );
+                    }
+                    c.clone()
+                }
+                // The view that shows most (see `output::view`), not the backs of walls,
+                // upright (`scene::Up`: OBJ files are y up, hirad's own scenes z up).
+                None => output::view::choose(scene, &output::scene_bounds(scene), size, up)
                     .map_err(|e| anyhow!("{e}"))?,
             },
         };
@@ -480,11 +491,15 @@ fn warn_unused(a: &Args) {
             (a.camera.is_some(), "--camera"),
             (a.supersample.is_some(), "--supersample"),
             (a.display_bands.is_some(), "--display-bands"),
+            (a.up.is_some(), "--up"),
         ] {
             if given {
                 eprintln!("warning: {name} has no effect without --image");
             }
         }
+    }
+    if a.image.is_some() && a.up.is_some() && a.camera.is_some() {
+        eprintln!("warning: --up has no effect with --camera (the camera gives its own up)");
     }
     if a.method == Method::Hr && a.epsilon >= 1.0 {
         eprintln!(

@@ -3,7 +3,7 @@
 
 use super::ObjExport;
 use super::mtl_write::{material_names, sanitize, write_mtl};
-use crate::scene::{ExpandVisitor, ExpandedNode, Scene, expand};
+use crate::scene::{ExpandVisitor, ExpandedNode, Scene, Up, expand};
 use std::io::{self, BufWriter, Write};
 
 /// Counts what the expansion will write, so that the header can say it up front.
@@ -28,6 +28,8 @@ impl ExpandVisitor for Count {
 struct Writer<'a, W: Write> {
     out: W,
     names: &'a [String],
+    /// The scene's up axis, written as +y.
+    up: Up,
     /// OBJ vertices written so far (the next one is `vertices + 1`).
     vertices: u64,
     faces: u64,
@@ -45,7 +47,7 @@ impl<W: Write> ExpandVisitor for Writer<'_, W> {
         }
         self.group(node.path)?;
         for v in &c.vertices {
-            let w = node.to_world.point(*v);
+            let w = self.up.to_y_up(node.to_world.point(*v));
             writeln!(self.out, "v {} {} {}", w.x, w.y, w.z)?;
         }
         for p in &c.polygons {
@@ -110,6 +112,7 @@ fn scene_warnings(scene: &Scene, out: &mut Vec<String>) {
 /// See [`super::export`].
 pub(crate) fn export(
     scene: &Scene,
+    up: Up,
     mtl_name: &str,
     obj: &mut dyn Write,
     mtl: &mut dyn Write,
@@ -135,6 +138,7 @@ pub(crate) fn export(
     let mut w = Writer {
         out: BufWriter::new(obj),
         names: &names,
+        up,
         vertices: 0,
         faces: 0,
         material: None,
@@ -151,6 +155,13 @@ pub(crate) fn export(
         w.out,
         "# Face k (1-based, in file order) is the polygon with global id k-1."
     )?;
+    if up != Up::Y {
+        writeln!(
+            w.out,
+            "# The scene's {} axis is written as +y, the OBJ convention (a rotation).",
+            up.name()
+        )?;
+    }
     writeln!(w.out, "mtllib {mtl_name}")?;
     expand(scene, &mut w)?;
     w.out.flush()?;

@@ -172,15 +172,17 @@ pub struct ObjExport {
 }
 
 /// Writes the expanded scene as OBJ (faces in global-id order) and its materials as MTL;
-/// the OBJ names the MTL as `mtl_name` in its `mtllib` line. Buffers internally; a scene
-/// that fails its check, or an `mtl_name` an OBJ line cannot hold, is `InvalidInput`.
+/// the OBJ names the MTL as `mtl_name` in its `mtllib` line. The scene's `up` axis becomes
+/// +y, the OBJ convention (`Up::Y` writes the coordinates as they are). Buffers internally;
+/// a scene that fails its check, or an `mtl_name` an OBJ line cannot hold, is `InvalidInput`.
 pub fn export(
     scene: &Scene,
+    up: crate::scene::Up,
     mtl_name: &str,
     obj: &mut dyn Write,
     mtl: &mut dyn Write,
 ) -> io::Result<ObjExport> {
-    export::export(scene, mtl_name, obj, mtl)
+    export::export(scene, up, mtl_name, obj, mtl)
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! The view of an image: `--camera` and `--size` option strings, camera checks, and a
 //! default camera for scenes that have none.
 
-use crate::scene::{Camera, Cluster, Scene};
+use crate::scene::{Camera, Cluster, Scene, Up};
 use glam::{DVec3, Vec3};
 use hirad_core::geometry::{Aabb, camera_ok};
 use hirad_core::limits::NONE;
@@ -137,12 +137,12 @@ pub fn check_camera(c: &Camera) -> Result<(), OptionError> {
 /// [`DEFAULT_VIEW_FROM`] (z up), with a [`DEFAULT_FOVY_DEG`] vertical field of view, far
 /// enough that the box's bounding sphere fits the narrower of the two fields of view.
 pub fn default_camera(bounds: &Aabb, size: Size) -> Result<Camera, OptionError> {
-    default_camera_up(bounds, size, false)
+    default_camera_up(bounds, size, Up::Z)
 }
 
-/// [`default_camera`] for a scene whose up axis is y (`y_up`, the OBJ convention) or z: the
-/// view comes from above and to the side either way.
-pub fn default_camera_up(bounds: &Aabb, size: Size, y_up: bool) -> Result<Camera, OptionError> {
+/// [`default_camera`] for a scene whose up axis is `up` (+y for OBJ, see `scene::Up`): the
+/// view comes from above and to the side whichever axis is up.
+pub fn default_camera_up(bounds: &Aabb, size: Size, up: Up) -> Result<Camera, OptionError> {
     if !bounds.is_finite_nonempty() {
         return Err(OptionError(
             "the scene has no geometry for a default camera to look at".into(),
@@ -158,21 +158,12 @@ pub fn default_camera_up(bounds: &Aabb, size: Size, y_up: bool) -> Result<Camera
     let half_y = f64::from(DEFAULT_FOVY_DEG).to_radians() * 0.5;
     let half_x = (half_y.tan() * size.aspect()).atan();
     let distance = radius / half_y.min(half_x).sin() * 1.02;
-    let from = if y_up {
-        glam::DVec3::new(
-            DEFAULT_VIEW_FROM.x as f64,
-            DEFAULT_VIEW_FROM.z as f64,
-            -DEFAULT_VIEW_FROM.y as f64,
-        )
-    } else {
-        DEFAULT_VIEW_FROM.as_dvec3()
-    }
-    .normalize();
+    let from = up.from_z_up(DEFAULT_VIEW_FROM.as_dvec3()).normalize();
     let camera = Camera {
         name: None,
         position: (centre + from * distance).as_vec3(),
         target: centre.as_vec3(),
-        up: if y_up { Vec3::Y } else { Vec3::Z },
+        up: up.vector().as_vec3(),
         fovy_deg: DEFAULT_FOVY_DEG,
     };
     check_camera(&camera).map_err(|e| OptionError(format!("default camera: {e}")))?;

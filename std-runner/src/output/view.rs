@@ -12,7 +12,7 @@
 //! an enclosure, where no view from outside sees a third of what it looks at.
 
 use super::camera::{DEFAULT_FOVY_DEG, DEFAULT_VIEW_FROM, OptionError, Size, check_camera};
-use crate::scene::{Camera, ExpandVisitor, ExpandedNode, Scene, expand};
+use crate::scene::{Camera, ExpandVisitor, ExpandedNode, Scene, Up, expand};
 use crate::visibility::ObvhsVisibility;
 use glam::{DVec3, Vec3};
 use hirad_core::geometry::Aabb;
@@ -69,9 +69,9 @@ struct Candidate {
     of_hits: f64,
 }
 
-/// The default camera for a scene without one (see the module); `y_up` for OBJ scenes.
-pub fn choose(scene: &Scene, bounds: &Aabb, size: Size, y_up: bool) -> Result<Camera, OptionError> {
-    let classic = super::camera::default_camera_up(bounds, size, y_up)?;
+/// The default camera for a scene without one (see the module) whose up axis is `up`.
+pub fn choose(scene: &Scene, bounds: &Aabb, size: Size, up: Up) -> Result<Camera, OptionError> {
+    let classic = super::camera::default_camera_up(bounds, size, up)?;
     let mut count = 0u64;
     struct Count<'a>(&'a mut u64);
     impl ExpandVisitor for Count<'_> {
@@ -109,12 +109,12 @@ pub fn choose(scene: &Scene, bounds: &Aabb, size: Size, y_up: bool) -> Result<Ca
     let (min, max) = (bounds.min.as_dvec3(), bounds.max.as_dvec3());
     let centre = (min + max) * 0.5;
     let distance = (classic.position.as_dvec3() - centre).length();
-    let up = if y_up { DVec3::Y } else { DVec3::Z };
+    let from_dirs = directions(up);
+    let up = up.vector();
     let mut outside = Vec::new();
     let first = score(classic.clone());
     let classic_score = first.as_ref().map_or(0.0, |c| c.showing);
     outside.extend(first);
-    let from_dirs = directions(y_up);
     for d in from_dirs {
         let camera = look(centre + d * distance, centre, up, DEFAULT_FOVY_DEG);
         if let Some(c) = camera.and_then(&score) {
@@ -148,7 +148,7 @@ pub fn choose(scene: &Scene, bounds: &Aabb, size: Size, y_up: bool) -> Result<Ca
             let mut at = centre;
             at[axis] += sign * half[axis] * 0.9;
             // A little towards the top, as a person stands.
-            at += up * (half.dot(up) * 0.2);
+            at += up * (half.dot(up.abs()) * 0.2);
             if let Some(c) = look(at, centre, up, INSIDE_FOVY_DEG).and_then(&score) {
                 inside.push(c);
             }
@@ -161,8 +161,8 @@ pub fn choose(scene: &Scene, bounds: &Aabb, size: Size, y_up: bool) -> Result<Ca
 }
 
 /// The box's other corners and its faces, as directions from its centre (unit), in the
-/// scene's frame (`y_up`: the OBJ convention).
-fn directions(y_up: bool) -> Vec<DVec3> {
+/// scene's frame (whose up axis is `up`).
+fn directions(up: Up) -> Vec<DVec3> {
     let mut out = Vec::new();
     let classic = DEFAULT_VIEW_FROM.as_dvec3().normalize();
     for sx in [-1.0, 1.0] {
@@ -182,10 +182,8 @@ fn directions(y_up: bool) -> Vec<DVec3> {
             out.push(d);
         }
     }
-    if y_up {
-        // The same set of directions, in the y-up frame (z up -> y up).
-        out.iter_mut().for_each(|d| *d = DVec3::new(d.x, d.z, -d.y));
-    }
+    // The same set of directions, in the scene's frame.
+    out.iter_mut().for_each(|d| *d = up.from_z_up(*d));
     out
 }
 

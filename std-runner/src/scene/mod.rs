@@ -12,6 +12,7 @@ mod decompile;
 mod expand;
 mod sample;
 mod small;
+mod up;
 
 pub use check::SceneError;
 pub use compile::compile;
@@ -19,6 +20,7 @@ pub use decompile::{decompile, read_image};
 pub use expand::{ExpandVisitor, ExpandedNode, expand};
 pub use sample::sample;
 pub use small::{too_small_detail, too_small_message};
+pub use up::Up;
 
 pub use hirad_core::geometry::Similarity;
 pub use hirad_core::image::{CameraData, LightData, PolygonRecord as Polygon};

@@ -69,12 +69,50 @@ fn export_scene() -> Scene {
 
 fn export_strings(s: &Scene) -> (String, String, ObjExport) {
     let (mut obj, mut mtl) = (Vec::new(), Vec::new());
-    let e = export(s, "out.mtl", &mut obj, &mut mtl).unwrap();
+    let e = export(s, Up::Y, "out.mtl", &mut obj, &mut mtl).unwrap();
     (
         String::from_utf8(obj).unwrap(),
         String::from_utf8(mtl).unwrap(),
         e,
     )
+}
+
+/// A z-up scene is written y up (OBJ's convention) by a rotation: (x, y, z) -> (x, z, -y),
+/// without negative zeros, said in the header; faces keep their corner order (a rotation
+/// keeps which side is the front).
+#[test]
+fn export_writes_a_z_up_scene_y_up() {
+    let s = export_scene();
+    let (mut obj, mut mtl) = (Vec::new(), Vec::new());
+    export(&s, Up::Z, "out.mtl", &mut obj, &mut mtl).unwrap();
+    let obj = String::from_utf8(obj).unwrap();
+    let (y_up, _, _) = export_strings(&s);
+    assert!(
+        obj.contains("# The scene's +z axis is written as +y"),
+        "{obj}"
+    );
+    assert!(!obj.contains("-0 ") && !obj.contains("-0\n"), "{obj}");
+    let vertices = |t: &str| -> Vec<[f32; 3]> {
+        t.lines()
+            .filter_map(|l| l.strip_prefix("v "))
+            .map(|l| {
+                let v: Vec<f32> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect()
+    };
+    let (rotated, plain) = (vertices(&obj), vertices(&y_up));
+    assert_eq!(rotated.len(), plain.len());
+    for (r, p) in rotated.iter().zip(&plain) {
+        assert_eq!(*r, [p[0], p[2], 0.0 - p[1]]);
+    }
+    let faces = |t: &str| -> Vec<String> {
+        t.lines()
+            .filter(|l| l.starts_with("f "))
+            .map(String::from)
+            .collect()
+    };
+    assert_eq!(faces(&obj), faces(&y_up));
 }
 
 #[test]
@@ -211,10 +249,10 @@ fn export_makes_material_names_unique() {
 fn export_refuses_bad_input() {
     let mut s = export_scene();
     s.root.polygons[0].material = 9;
-    let err = export(&s, "x.mtl", &mut Vec::new(), &mut Vec::new()).unwrap_err();
+    let err = export(&s, Up::Y, "x.mtl", &mut Vec::new(), &mut Vec::new()).unwrap_err();
     assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
     let s = export_scene();
-    let err = export(&s, "a#b.mtl", &mut Vec::new(), &mut Vec::new()).unwrap_err();
+    let err = export(&s, Up::Y, "a#b.mtl", &mut Vec::new(), &mut Vec::new()).unwrap_err();
     assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
 }
 

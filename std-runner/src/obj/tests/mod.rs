@@ -10,7 +10,7 @@ use super::lex::{Lexer, Line, Pos};
 use super::number::{parse_f32, resolve_index};
 use super::split::{Piece, split};
 use super::*;
-use crate::scene::{Cluster, InstanceOf, Material, MaterialData, Similarity, quad, triangle};
+use crate::scene::{Cluster, InstanceOf, Material, MaterialData, Similarity, Up, quad, triangle};
 use glam::{Quat, Vec3};
 use hirad_core::geometry::polygon_shape;
 use proptest::prelude::*;
