@@ -453,28 +453,23 @@ fn results_keep_the_obj_face_number() {
     assert!(!h.lines().next().unwrap().contains("face"));
 }
 
-/// Item 8: the progress line moves forward and ends at 100%: every phase with a total runs
-/// from its first count to all of it without stepping back, the phases that each
-/// refinement pass runs again are named with their pass, open counts only grow, and the
-/// load shows every polygon loaded. (`HIRAD_PROGRESS=every` draws every update, terminal or
-/// not.)
-#[test]
-fn progress_moves_forward_to_the_end() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = canopy(dir.path(), 2, 4);
+/// Runs `hirad args` drawing every progress update (`HIRAD_PROGRESS=every`, terminal or
+/// not) and checks that every phase with a total runs from its first count to all of it
+/// without stepping back or changing its total; returns each stretch of one label with its
+/// counts, in order.
+fn progress_of(args: &[&str]) -> Vec<(String, Vec<u64>)> {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
-        .args(["solve", s(&scene), "--max-imbalance", "100"])
+        .args(args)
         .env("HIRAD_PROGRESS", "every")
         .output()
         .unwrap();
-    assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
     let lines: Vec<&str> = err
         .split(['\r', '\n'])
         .map(|l| l.trim_start_matches("\x1b[2K"))
         .filter(|l| l.contains(" s") && (l.contains('[') || l.contains("): ")))
         .collect();
-    assert!(lines.len() > 20, "{err}");
     // (label, done, total) of every drawn line, in order.
     let parse = |l: &str| -> (String, u64, Option<u64>) {
         if let Some(at) = l.find(" [") {
@@ -493,11 +488,9 @@ fn progress_moves_forward_to_the_end() {
         }
     };
     let parsed: Vec<_> = lines.iter().map(|l| parse(l)).collect();
+    let mut stretches = Vec::new();
     let mut i = 0;
-    let mut refining = Vec::new();
-    let mut iterations = Vec::new();
     while i < parsed.len() {
-        // One stretch of the same label.
         let label = &parsed[i].0;
         let mut j = i;
         while j < parsed.len() && &parsed[j].0 == label {
@@ -517,29 +510,66 @@ fn progress_moves_forward_to_the_end() {
         if let Some(total) = last.2 {
             assert_eq!(last.1, total, "{label} ended at {}/{total}", last.1);
         }
-        if label.ends_with("refining (links)") {
-            refining.push(last.1);
-        }
-        if label == "solving (iterations)" {
-            iterations.extend(run.iter().map(|r| r.1));
-        }
-        if label == "loaded (polygons)" {
-            assert!(last.1 > 0);
-        }
+        stretches.push((label.clone(), run.iter().map(|r| r.1).collect()));
         i = j;
     }
+    stretches
+}
+
+/// Item 8: the progress line moves forward and ends at 100% (see [`progress_of`]), the
+/// phases that each refinement pass runs again are named with their pass, open counts only
+/// grow, and the load shows every polygon loaded. The exact solver's long phase, its form
+/// factors, counts its elements (it showed one line that never moved).
+#[test]
+fn progress_moves_forward_to_the_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = canopy(dir.path(), 2, 4);
+    let stretches = progress_of(&["solve", s(&scene), "--max-imbalance", "100"]);
+    assert!(stretches.len() > 10, "{stretches:?}");
+    let last = |label: &str| -> Vec<u64> {
+        stretches
+            .iter()
+            .filter(|(l, _)| l.ends_with(label))
+            .map(|(_, counts)| *counts.last().unwrap())
+            .collect()
+    };
+    let refining = last("refining (links)");
     assert!(
-        refining.iter().all(|&n| n > 0),
+        !refining.is_empty() && refining.iter().all(|&n| n > 0),
         "refining counts {refining:?}"
     );
+    assert!(last("loaded (polygons)").iter().all(|&n| n > 0));
     assert!(
-        parsed.iter().any(|p| p.0.starts_with("pass 2: ")),
+        stretches.iter().any(|(l, _)| l.starts_with("pass 2: ")),
         "passes are not named"
     );
+    let iterations: Vec<u64> = stretches
+        .iter()
+        .filter(|(l, _)| l == "solving (iterations)")
+        .flat_map(|(_, counts)| counts.iter().copied())
+        .collect();
     assert!(
         iterations.windows(2).all(|w| w[1] >= w[0]) && iterations.last() > Some(&0),
         "iterations {iterations:?}"
     );
+    let exact = progress_of(&[
+        "solve",
+        s(&fixture("cornell_box.hir")),
+        "--method",
+        "exact",
+        "--elements",
+        "300",
+    ]);
+    let labels: Vec<&str> = exact.iter().map(|(l, _)| l.as_str()).collect();
+    assert!(
+        labels.contains(&"form factors (elements)") && labels.contains(&"solving (iterations)"),
+        "{exact:?}"
+    );
+    let ff = exact
+        .iter()
+        .find(|(l, _)| l == "form factors (elements)")
+        .unwrap();
+    assert!(*ff.1.last().unwrap() >= 250, "{exact:?}");
 }
 
 /// The pixels of an 8-bit RGB PNG.

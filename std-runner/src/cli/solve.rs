@@ -388,9 +388,10 @@ pub fn run(a: Args) -> Result<()> {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()?;
-            progress.phase("exact solve", None);
             let r = pool
-                .install(|| exact::solve_exact_obvhs(scene, &settings, &mut outputs))
+                .install(|| {
+                    exact::solve_exact_obvhs_with(scene, &settings, &mut outputs, &progress)
+                })
                 .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?;
             progress.finish();
             report.elements = r.elements as u64;

@@ -79,17 +79,24 @@ struct Cost {
     clear_pairs: u64,
 }
 
-/// Computes every row; `rays` visibility rays per quadrature point and emitter.
+/// Computes every row; `rays` visibility rays per quadrature point and emitter. Each row done
+/// advances `progress` by one.
 pub fn build<R: PairRays + ?Sized>(
     mesh: &Mesh,
     quad: &Quadrature,
     rays: u32,
     visibility: &R,
+    progress: &crate::output::Progress,
 ) -> Matrix {
     let results: Vec<(Row, Cost)> = (0..mesh.elements.len())
         .into_par_iter()
-        .map(|i| row(mesh, quad, rays, visibility, i))
+        .map(|i| {
+            let r = row(mesh, quad, rays, visibility, i);
+            progress.advance(1);
+            r
+        })
         .collect();
+    progress.set(mesh.elements.len() as u64);
     let mut m = Matrix::default();
     m.rows.reserve(results.len());
     for (r, cost) in results {

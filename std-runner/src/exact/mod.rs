@@ -56,6 +56,7 @@ mod solve;
 
 pub use error::ExactError;
 
+use crate::output::Progress;
 use crate::scene::Scene;
 use crate::visibility::ObvhsVisibility;
 use hirad_core::sink::Sink;
@@ -180,6 +181,7 @@ pub fn solve_exact<S: Sink, V: Visibility + ?Sized>(
         visibility,
         sink,
         start,
+        &Progress::new(true),
     )
 }
 
@@ -190,7 +192,19 @@ pub fn solve_exact_obvhs<S: Sink>(
     settings: &ExactSettings,
     sink: &mut S,
 ) -> Result<ExactReport, ExactError<S::Error>> {
+    solve_exact_obvhs_with(scene, settings, sink, &Progress::new(true))
+}
+
+/// [`solve_exact_obvhs`] reporting its phases to `progress`: the form factors row by row
+/// (most of the time), the iterations as they run.
+pub fn solve_exact_obvhs_with<S: Sink>(
+    scene: &Scene,
+    settings: &ExactSettings,
+    sink: &mut S,
+    progress: &Progress,
+) -> Result<ExactReport, ExactError<S::Error>> {
     let start = Instant::now();
+    progress.phase("meshing", None);
     settings.check().map_err(ExactError::Settings)?;
     let mesh = Mesh::build(scene, settings)?;
     let polygons: Vec<&[glam::Vec3]> = mesh.polygons.iter().map(|p| p.corners()).collect();
@@ -203,11 +217,13 @@ pub fn solve_exact_obvhs<S: Sink>(
         &visibility,
         sink,
         start,
+        progress,
     )
 }
 
 /// The solve proper, after the mesh exists: `rays` for the form factors, `visibility` for
 /// the buried points and the direct light (the same polygons).
+#[allow(clippy::too_many_arguments)]
 fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
     scene: &Scene,
     settings: &ExactSettings,
@@ -216,6 +232,7 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
     visibility: &V,
     sink: &mut S,
     start: Instant,
+    progress: &Progress,
 ) -> Result<ExactReport, ExactError<S::Error>> {
     let worst = (mesh.slots as u64).pow(2) * size_of::<matrix::Entry>() as u64;
     if worst > MAX_MATRIX_BYTES {
@@ -226,11 +243,15 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
         });
     }
     let mut quad = Quadrature::new(mesh, settings.quadrature_split);
+    progress.phase("finding buried points", None);
     let exposure = buried::bury(scene, mesh, &mut quad, visibility);
     let matrix_start = Instant::now();
-    let m = matrix::build(mesh, &quad, settings.rays, rays);
+    progress.phase("form factors (elements)", Some(mesh.elements.len() as u64));
+    let m = matrix::build(mesh, &quad, settings.rays, rays, progress);
     let matrix_seconds = matrix_start.elapsed().as_secs_f64();
+    progress.phase("direct light", None);
     let (direct, direct_rays) = direct::direct(scene, mesh, &exposure.exposed, visibility);
+    progress.phase("solving (iterations)", None);
     let solution = solve::solve(
         scene,
         mesh,
@@ -238,8 +259,10 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
         &direct,
         settings.tolerance,
         settings.max_iterations,
+        progress,
     )
     .map_err(|(iterations, error)| ExactError::NotConverged { iterations, error })?;
+    progress.phase("writing", None);
     output::emit(scene, mesh, &solution, &exposure.exposed, sink).map_err(ExactError::Sink)?;
     Ok(ExactReport {
         polygons: mesh.polygons.len(),

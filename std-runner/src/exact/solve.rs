@@ -68,6 +68,7 @@ pub fn solve(
     direct: &[f64],
     tolerance: f64,
     max_iterations: u32,
+    progress: &crate::output::Progress,
 ) -> Result<Solution, (u32, f64)> {
     let bands = scene.bands as usize;
     let n = mesh.elements.len();
@@ -87,6 +88,7 @@ pub fn solve(
     let mut track = [Band::default(); MAX_BANDS];
     let mut error = f64::INFINITY;
     for iteration in 1..=max_iterations {
+        progress.set(u64::from(iteration - 1));
         let mut change = [0.0f64; MAX_BANDS];
         for e in 0..n {
             let (hf, hb) = irradiance(mesh, rows, direct, &b, bands, e);

@@ -195,7 +195,7 @@ fn duration(d: Duration) -> String {
 }
 
 /// The text of the line: `phase [#####-----] done/total pct% secs s`, or `phase: done,
-/// secs s` for an open count.
+/// secs s` for an open count (`phase, secs s` when it counts nothing).
 pub fn line(phase: &str, done: u64, total: Option<u64>, elapsed: Duration) -> String {
     let secs = elapsed.as_secs_f64();
     match total {
@@ -213,6 +213,8 @@ pub fn line(phase: &str, done: u64, total: Option<u64>, elapsed: Duration) -> St
                 fraction * 100.0
             )
         }
+        // A phase that counts nothing (no unit named, nothing counted): its name and time.
+        None if done == 0 && !phase.ends_with(')') => format!("{phase}, {secs:.1} s"),
         None => format!("{phase}: {done}, {secs:.1} s"),
     }
 }

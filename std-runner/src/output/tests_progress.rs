@@ -39,6 +39,14 @@ fn line_text() {
         line("refine", 12, None, Duration::from_secs(3)),
         "refine: 12, 3.0 s"
     );
+    assert_eq!(
+        line("meshing", 0, None, Duration::from_millis(500)),
+        "meshing, 0.5 s"
+    );
+    assert_eq!(
+        line("solving (iterations)", 0, None, Duration::ZERO),
+        "solving (iterations): 0, 0.0 s"
+    );
     assert!(line("x", 3, Some(0), Duration::ZERO).contains("100%"));
     assert!(line("x", 30, Some(10), Duration::ZERO).contains("100%"));
 }
