@@ -749,8 +749,8 @@ fn default_pictures_show_the_scene() {
 /// Item 1, its sibling: a scene keeps its up through OBJ. hirad's scenes are z up, OBJ files
 /// y up: `flatten` turns one into the other (and says so), `convert` turns an OBJ back, and
 /// the default view of the OBJ is upright (the lamps on the ceiling at the top of the
-/// picture; before, the flattened room was read lying on its side). `--up` names another
-/// axis, checked.
+/// picture; before, the flattened room was read lying on its side), and the view chosen is
+/// said as the `--camera` that gives it back. `--up` names another axis, checked.
 #[test]
 fn a_scene_keeps_its_up_through_obj() {
     let dir = tempfile::tempdir().unwrap();
@@ -780,15 +780,26 @@ fn a_scene_keeps_its_up_through_obj() {
     assert!(text.contains("# The scene's +z axis is written as +y"));
     // Upright: the saturated pixels (the ceiling's lamp panels) in the picture's top half.
     let png = d.join("room.png");
+    let out = hirad(&["solve", s(&obj), "--image", s(&png), "--size", "160x120"]);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    // The view chosen is said as the --camera that gives it back.
+    let camera = err
+        .lines()
+        .find_map(|l| l.strip_prefix("note: the default view, +y up: --camera "))
+        .unwrap_or_else(|| panic!("{err}"))
+        .split(' ')
+        .next()
+        .unwrap()
+        .to_string();
+    let again = d.join("again.png");
+    let size = ["--size", "160x120", "-q"];
     ok(&[
-        "solve",
-        s(&obj),
-        "--image",
-        s(&png),
-        "--size",
-        "160x120",
-        "-q",
-    ]);
+        &["solve", s(&obj), "--image", s(&again), "--camera", &camera],
+        &size[..],
+    ]
+    .concat());
+    assert_eq!(std::fs::read(&again).unwrap(), std::fs::read(&png).unwrap());
     let px = png_pixels(&png);
     let lamps: Vec<usize> = (0..px.len())
         .filter(|&i| px[i].iter().all(|&v| v >= 250))

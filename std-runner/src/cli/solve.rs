@@ -242,8 +242,18 @@ pub fn run(a: Args) -> Result<()> {
                 }
                 // The view that shows most (see `output::view`), not the backs of walls,
                 // upright (`scene::Up`: OBJ files are y up, hirad's own scenes z up).
-                None => output::view::choose(scene, &output::scene_bounds(scene), size, up)
-                    .map_err(|e| anyhow!("{e}"))?,
+                None => {
+                    let c = output::view::choose(scene, &output::scene_bounds(scene), size, up)
+                        .map_err(|e| anyhow!("{e}"))?;
+                    if !a.quiet {
+                        eprintln!(
+                            "note: the default view, {} up: --camera {} (change it, or --up)",
+                            up.name(),
+                            output::camera_arg(&c)
+                        );
+                    }
+                    c
+                }
             },
         };
         let mut sink = ImageSink::new(

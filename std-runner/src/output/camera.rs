@@ -105,6 +105,27 @@ pub fn parse_camera(s: &str) -> Result<Camera, OptionError> {
     Ok(camera)
 }
 
+/// A camera as the `--camera` value that gives it back ([`parse_camera`]): shortest decimal
+/// forms, which read back to the same f32 values.
+pub fn camera_arg(c: &Camera) -> String {
+    let v = [
+        c.position.x,
+        c.position.y,
+        c.position.z,
+        c.target.x,
+        c.target.y,
+        c.target.z,
+        c.up.x,
+        c.up.y,
+        c.up.z,
+        c.fovy_deg,
+    ];
+    v.iter()
+        .map(|x| format!("{}", x + 0.0))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
 /// Checks that a camera can form an image ([`camera_ok`]), saying what is wrong if not.
 pub fn check_camera(c: &Camera) -> Result<(), OptionError> {
     if camera_ok(c.position, c.target, c.up, c.fovy_deg) {

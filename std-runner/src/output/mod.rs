@@ -20,8 +20,8 @@ pub mod stats;
 pub mod view;
 
 pub use camera::{
-    OptionError, Projection, Size, check_camera, default_camera, default_camera_up, parse_camera,
-    parse_size, scene_bounds,
+    OptionError, Projection, Size, camera_arg, check_camera, default_camera, default_camera_up,
+    parse_camera, parse_size, scene_bounds,
 };
 pub use exr_file::{read_exr, write_exr};
 pub use frame::{Frame, channel_names};

@@ -1,6 +1,8 @@
 //! Option parsing, camera checks, the default camera, scene bounds and the projection.
 
-use super::camera::{Projection, Size, default_camera, parse_camera, parse_size, scene_bounds};
+use super::camera::{
+    Projection, Size, camera_arg, default_camera, parse_camera, parse_size, scene_bounds,
+};
 use crate::scene::{Camera, Cluster, InstanceOf, Original, Scene, Similarity, quad};
 use glam::{Quat, Vec3};
 use hirad_core::geometry::{Aabb, camera_ok};
@@ -162,4 +164,20 @@ fn bounds_follow_instances() {
         Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(11.0, 2.0, 5.0))
     );
     assert!(scene_bounds(&Scene::new(1)).is_empty());
+}
+
+#[test]
+fn a_camera_prints_as_the_argument_that_gives_it_back() {
+    let b = Aabb {
+        min: Vec3::new(-1.3, 0.1, -0.7),
+        max: Vec3::new(2.9, 1.7, 3.3),
+    };
+    let c = default_camera(&b, parse_size("320x240").unwrap()).unwrap();
+    let arg = camera_arg(&c);
+    assert!(!arg.contains("-0,") && !arg.contains(' '), "{arg}");
+    let back = parse_camera(&arg).unwrap();
+    assert_eq!(
+        (back.position, back.target, back.up, back.fovy_deg),
+        (c.position, c.target, c.up, c.fovy_deg)
+    );
 }
