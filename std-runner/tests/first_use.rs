@@ -816,6 +816,10 @@ fn a_scene_keeps_its_up_through_obj() {
     let err =
         String::from_utf8_lossy(&hirad(&["convert", s(&obj), "-o", s(&back)]).stderr).into_owned();
     assert!(err.contains("+y axis becomes +z"), "{err}");
+    // `info` says which axis is up, and why.
+    assert!(ok(&["info", s(&obj)]).contains("up axis           +y (the OBJ convention"));
+    assert!(ok(&["info", s(&back)]).contains("up axis           +z (hirad's default"));
+    assert!(ok(&["info", s(&room)]).contains("up axis           +z (its first camera"));
     let again = d.join("again.obj");
     ok(&["flatten", s(&back), "-o", s(&again), "-q"]);
     let vertices = |p: &Path| -> Vec<String> {

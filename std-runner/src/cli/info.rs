@@ -33,6 +33,8 @@ struct Report {
     two_sided: u32,
     emitting: u32,
     info: hirad_core::image::SceneInfo,
+    /// The up axis `solve` and `flatten` take, and what says so.
+    up: (crate::scene::Up, &'static str),
 }
 
 fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
@@ -45,7 +47,19 @@ fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
         two_sided: 0,
         emitting: 0,
         info,
+        up: (crate::scene::Up::Y, "the OBJ convention"),
     };
+    if format != Format::Obj {
+        let camera = if info.cameras > 0 {
+            Some(v.camera(hirad_core::CameraId(0))?.up)
+        } else {
+            None
+        };
+        let sky = (0..info.sky)
+            .map(|i| v.sky(hirad_core::LightId(i)))
+            .collect::<Result<Vec<_>, _>>()?;
+        r.up = crate::scene::Up::of_parts(camera, &sky, info.bands as usize);
+    }
     let mut buf = [0u8; MAX_NAME_BYTES];
     for b in 0..info.bands {
         if let Some(id) = v.band_name(b)? {
@@ -128,6 +142,12 @@ fn table(path: &std::path::Path, r: &Report) -> String {
         i.suns, i.sky
     );
     let _ = writeln!(s, "cameras           {}", i.cameras);
+    let _ = writeln!(
+        s,
+        "up axis           {} ({}; --up changes it)",
+        r.up.0.name(),
+        r.up.1
+    );
     let _ = writeln!(s, "binary image      {} bytes", i.image_bytes);
     s
 }
@@ -141,7 +161,7 @@ fn json(path: &std::path::Path, r: &Report) -> String {
             "\"two_sided_materials\":{},\"emitting_materials\":{},\"polygons\":{},\"stored_polygons\":{},",
             "\"vertices\":{},\"clusters\":{},\"originals\":{},\"exact_instances\":{},",
             "\"approximate_instances\":{},\"instancing_depth\":{},\"cluster_depth\":{},\"suns\":{},",
-            "\"sky_directions\":{},\"cameras\":{},\"image_bytes\":{}}}\n"
+            "\"sky_directions\":{},\"cameras\":{},\"up_axis\":{},\"image_bytes\":{}}}\n"
         ),
         json_str(&path.display().to_string()),
         json_str(r.format.name()),
@@ -162,6 +182,7 @@ fn json(path: &std::path::Path, r: &Report) -> String {
         i.suns,
         i.sky,
         i.cameras,
+        json_str(r.up.0.name()),
         i.image_bytes
     )
 }

@@ -53,15 +53,32 @@ impl Up {
     /// The up axis of a hirad scene (see the module): its first camera's, else its sky's,
     /// else +z.
     pub fn of_scene(scene: &Scene) -> Up {
-        if let Some(c) = scene.cameras.first() {
-            return Up::nearest(c.up).unwrap_or(Up::Z);
+        Up::of_parts(
+            scene.cameras.first().map(|c| c.up),
+            &scene.sky,
+            scene.bands as usize,
+        )
+        .0
+    }
+
+    /// [`Up::of_scene`] from the first camera's up vector and the sky of `bands` bands,
+    /// with what decided it: `"its first camera"`, `"its sky"` or `"hirad's default"`.
+    pub fn of_parts(
+        camera_up: Option<Vec3>,
+        sky: &[super::LightData],
+        bands: usize,
+    ) -> (Up, &'static str) {
+        if let Some(up) = camera_up {
+            return (Up::nearest(up).unwrap_or(Up::Z), "its first camera");
         }
-        let sky: Vec3 = scene
-            .sky
+        let sum: Vec3 = sky
             .iter()
-            .map(|s| s.towards * s.irradiance.iter().take(scene.bands as usize).sum::<f32>())
+            .map(|s| s.towards * s.irradiance.iter().take(bands).sum::<f32>())
             .sum();
-        Up::nearest(sky).unwrap_or(Up::Z)
+        match Up::nearest(sum) {
+            Some(up) => (up, "its sky"),
+            None => (Up::Z, "hirad's default"),
+        }
     }
 
     /// Parses `x`, `y`, `z`, `-x`, `-y`, `-z` (also `+x`..., any case).
