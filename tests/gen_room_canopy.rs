@@ -394,8 +394,8 @@ fn a_room_is_lit_the_same_whichever_axis_is_up() {
     // turned so that y, then -x, is up (as an OBJ of it is read). The generated one diverged:
     // a point of the skirting near the floor's edge, seen almost edge-on from the floor's
     // centre, had the floor cluster's kernel divided by its nearly empty shadow that way
-    // (45 times the light it could get). The turned ones must agree with it polygon by
-    // polygon: only rounding and the order of rays differ.
+    // (a link coefficient of 45; at most 1 is possible). The turned ones must agree with it
+    // polygon by polygon: only rounding and the order of rays differ.
     let s = room_scene(&[
         "--chairs",
         "0",

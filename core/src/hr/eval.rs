@@ -575,7 +575,8 @@ fn flux_at<V: Visibility + ?Sized>(
 /// flat cluster, its radiosity: exact). Taking the direction to `x` instead, a point near a
 /// large flat cluster's edge, seen almost edge-on from its centre, had its kernel divided by
 /// a nearly empty shadow while the emission stayed that of the receiver's centre: a floor
-/// gave the skirting along a room's walls 45 times its light, and the solution diverged.
+/// gave the skirting along a room's walls a link coefficient of 45 (at most 1 is possible),
+/// and the solution diverged.
 /// The shadow is kept to at least a thousandth of the box's largest face (a link along a
 /// flat cluster's plane then takes less light than it should, never more).
 fn kernel_projection(x: Vec3, min: Vec3, max: Vec3, towards: Vec3) -> f32 {

@@ -43,3 +43,28 @@ pub fn fixture(name: &str) -> PathBuf {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// Writes `text` to `dir/name`; returns the path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A maize field of `rows` x `plants` plants (two bands, sun and sky) in `dir`.
+pub fn canopy(dir: &Path, rows: u32, plants: u32) -> PathBuf {
+    let scene = dir.join("field.hirb");
+    let (rows, plants) = (rows.to_string(), plants.to_string());
+    ok(&[
+        "gen",
+        "canopy",
+        "--rows",
+        &rows,
+        "--plants-per-row",
+        &plants,
+        "-q",
+        "-o",
+        s(&scene),
+    ]);
+    scene
+}
