@@ -9,8 +9,8 @@ use hirad::scene::Scene;
 use hirad::solve::world_polygons;
 use hirad::visibility::ObvhsVisibility;
 use hirad_core::hr::{HrError, NoProgress, Settings, Stats};
-use hirad_core::sampling::{hash3, unit2};
 use hirad_core::visibility::Visibility;
+use hirad_tests::Rng;
 
 fn parse(text: &str) -> Scene {
     hirad::text::parse(text.as_bytes()).unwrap()
@@ -29,19 +29,6 @@ fn exact(scene: &Scene, elements: usize) -> ResultsTable {
     };
     solve_exact_obvhs(scene, &settings, &mut table).unwrap();
     table
-}
-
-/// Deterministic numbers in [0, 1).
-struct Rng(u32, u32);
-
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.1 += 1;
-        unit2(hash3(self.0, self.1, 0x7E57)).0
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
 }
 
 /// A quad of half-size (`a`, `b`) centred at `c`, spanned by the orthonormal `u`, `v`.

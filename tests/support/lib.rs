@@ -47,3 +47,20 @@ pub fn fixture(name: &str) -> PathBuf {
         .join("fixtures")
         .join(name)
 }
+
+pub mod canopy;
+
+/// Deterministic numbers in [0, 1) from a seed and a counter.
+pub struct Rng(pub u32, pub u32);
+
+impl Rng {
+    /// The next number in [0, 1).
+    pub fn next(&mut self) -> f32 {
+        self.1 += 1;
+        hirad_core::sampling::unit2(hirad_core::sampling::hash3(self.0, self.1, 0x7E57)).0
+    }
+    /// The next number in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+}

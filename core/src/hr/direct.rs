@@ -38,7 +38,7 @@ const EXPOSURE_GRID: u32 = 4;
 /// Extra levels of adaptive subdivision of a grid cell for a sun.
 const SUN_DEPTH: u32 = 2;
 /// Most grid cells along a side of a patch.
-const MAX_CELLS: u32 = 8;
+const MAX_CELLS: u32 = 16;
 
 /// Computes exposure and direct light for every unprepared patch.
 pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
@@ -226,7 +226,7 @@ fn prepare<V: Visibility + ?Sized>(
             shadow += e_max * p.area * 2.0 * lit.min(1.0 - lit);
         }
         // Sky: one importance-sampled direction per sample.
-        let sky = sky_samples(cells, st.settings.rays);
+        let sky = sky_samples(p.area / st.typical_area, st.settings.rays);
         sky_light(
             st,
             ws,
@@ -263,9 +263,20 @@ fn cells_for(st: &State, area: f32) -> u32 {
     (libm::ceilf(r) as u32).clamp(2, MAX_CELLS)
 }
 
-/// Sky samples for a grid: `rays` per cell, at least 16.
-fn sky_samples(cells: u32, rays: u32) -> u32 {
-    (cells * cells * rays.max(1)).max(16)
+/// Sky samples of a patch whose area is `ratio` times the scene's typical polygon:
+/// `16 x rays` for one of typical size, growing as the square of the ratio, at most 4096.
+/// Each sample tests one direction, so a side's sky light is a plain Monte Carlo estimate
+/// with a relative noise of about `sqrt((1 - p) / (p N))` at a lit fraction `p`; a patch
+/// larger than the polygons that shadow it (soil under leaves) is worth more samples, and
+/// such patches are few. Measured under random canopies of LAI 2: see `tests/sunlight.rs`.
+fn sky_samples(ratio: f32, rays: u32) -> u32 {
+    let base = 16.0 * rays.max(1) as f32;
+    let r = if ratio.is_finite() {
+        ratio.max(1.0)
+    } else {
+        1.0
+    };
+    (base * r * r).clamp(base, 4096.0) as u32
 }
 
 /// True when every ray from `x` (on polygon `poly`, front normal `n`) meets the back of a
@@ -433,8 +444,15 @@ pub(crate) fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
 }
 
 /// The lit fraction of a patch towards a directional source: a `cells x cells` grid, 2 x 2
-/// jittered samples per cell, cells whose samples disagree split again (up to
-/// [`SUN_DEPTH`] levels), every sample weighted by its share of the area.
+/// jittered samples per cell, every sample weighted by its share of the area.
+///
+/// Cells are split (up to [`SUN_DEPTH`] levels) where a shadow edge may cross them: a cell
+/// whose samples disagree, or differ from a neighbour's (top cells) or a sibling's (deeper
+/// cells): an edge between them may clip its corner. Samples that decide a split do
+/// not also estimate: a cell kept whole because its samples agreed would count a gap (or a
+/// shadow) that they all missed as shadow (or light), and under fine foliage, whose gaps
+/// are small holes in a shadow, that made the soil 5 to 10% too dark. A cell kept whole is
+/// estimated from fresh samples, so the estimate is unbiased whatever the decisions.
 #[allow(clippy::too_many_arguments)]
 fn lit_fraction<V: Visibility + ?Sized>(
     st: &State,
@@ -447,22 +465,10 @@ fn lit_fraction<V: Visibility + ?Sized>(
     rays: &mut u32,
 ) -> f32 {
     let (mut lit, mut total) = (0.0f32, 0.0f32);
-    // (u0, v0, size, depth) of cells still to sample.
-    let mut stack: heapless::Vec<(f32, f32, f32, u32), 64> = heapless::Vec::new();
-    let size = 1.0 / cells as f32;
-    let mut next_cell = 0u32;
     let mut id = 0u32;
-    while let Some((u0, v0, s, depth)) = stack.pop().or_else(|| {
-        if next_cell < cells * cells {
-            let (i, j) = (next_cell % cells, next_cell / cells);
-            next_cell += 1;
-            Some((i as f32 * size, j as f32 * size, size, 0))
-        } else {
-            None
-        }
-    }) {
-        let mut vals = [0.0f32; 4];
-        let mut wts = [0.0f32; 4];
+    // 2 x 2 jittered samples of the cell at (u0, v0) of side s: visibility and area weight.
+    let mut sample4 = |u0: f32, v0: f32, s: f32| {
+        let (mut vals, mut wts) = ([0.0f32; 4], [0.0f32; 4]);
         let half = 0.5 * s;
         for (k, (v, w)) in vals.iter_mut().zip(wts.iter_mut()).enumerate() {
             id += 1;
@@ -474,23 +480,69 @@ fn lit_fraction<V: Visibility + ?Sized>(
             *v = vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
             *w = jacobian(corners, u, vv);
         }
-        let mixed = vals.iter().any(|&v| v != vals[0]);
-        if mixed && depth < SUN_DEPTH && stack.capacity() - stack.len() >= 4 {
-            for k in 0..4 {
-                let _ = stack.push((
-                    u0 + (k % 2) as f32 * half,
-                    v0 + (k / 2) as f32 * half,
-                    half,
-                    depth + 1,
-                ));
-            }
-            continue;
+        (vals, wts)
+    };
+    // What a cell's samples saw: 0 all shadow, 1 all lit, 2 both.
+    let class = |vals: &[f32; 4]| -> u8 {
+        if vals.iter().any(|&v| v != vals[0]) {
+            2
+        } else {
+            (vals[0] > 0.0) as u8
         }
-        // A cell's area share is its parameter area times the mean Jacobian of its samples.
-        let area = s * s;
-        for k in 0..4 {
-            lit += area * wts[k] * vals[k];
-            total += area * wts[k];
+    };
+    let n = cells.clamp(1, MAX_CELLS) as usize;
+    let size = 1.0 / n as f32;
+    let mut seen = [0u8; (MAX_CELLS * MAX_CELLS) as usize];
+    for (c, slot) in seen.iter_mut().enumerate().take(n * n) {
+        let (i, j) = (c % n, c / n);
+        *slot = class(&sample4(i as f32 * size, j as f32 * size, size).0);
+    }
+    // (u0, v0, size, depth) of cells still to sample.
+    let mut stack: heapless::Vec<(f32, f32, f32, u32), 64> = heapless::Vec::new();
+    for c in 0..n * n {
+        let (i, j) = (c % n, c / n);
+        let own = seen[c];
+        let edge = own == 2
+            || (i > 0 && seen[c - 1] != own)
+            || (i + 1 < n && seen[c + 1] != own)
+            || (j > 0 && seen[c - n] != own)
+            || (j + 1 < n && seen[c + n] != own);
+        let _ = stack.push((
+            i as f32 * size,
+            j as f32 * size,
+            size,
+            if edge { 0 } else { SUN_DEPTH },
+        ));
+        while let Some((u0, v0, s, depth)) = stack.pop() {
+            if depth < SUN_DEPTH {
+                // Split: the children decide for themselves from their own samples, each
+                // also split where a sibling saw otherwise (an edge between them).
+                let half = 0.5 * s;
+                let d = depth + 1;
+                let corner = |k: usize| (u0 + (k % 2) as f32 * half, v0 + (k / 2) as f32 * half);
+                let mut kids = [0u8; 4];
+                if d < SUN_DEPTH {
+                    for (k, c) in kids.iter_mut().enumerate() {
+                        let (cu, cv) = corner(k);
+                        *c = class(&sample4(cu, cv, half).0);
+                    }
+                }
+                let uniform = kids.iter().all(|&c| c == kids[0] && c != 2);
+                for k in 0..4 {
+                    let (cu, cv) = corner(k);
+                    let split = d < SUN_DEPTH && !uniform;
+                    let _ = stack.push((cu, cv, half, if split { d } else { SUN_DEPTH }));
+                }
+                continue;
+            }
+            // Estimated from fresh samples.
+            let (vals, wts) = sample4(u0, v0, s);
+            // A cell's area share is its parameter area times the mean Jacobian of its samples.
+            let area = s * s;
+            for k in 0..4 {
+                lit += area * wts[k] * vals[k];
+                total += area * wts[k];
+            }
         }
     }
     if total > 0.0 {
