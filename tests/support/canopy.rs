@@ -76,7 +76,7 @@ impl RandomCanopy {
                 let c = DVec3::new(
                     r.range(-1.0, 1.0) as f64 * self.half,
                     r.range(-1.0, 1.0) as f64 * self.half,
-                    self.slab.0 + (self.slab.1 - self.slab.0) * r.next() as f64,
+                    self.slab.0 + (self.slab.1 - self.slab.0) * r.unit() as f64,
                 );
                 [
                     c - u * h - v * h,

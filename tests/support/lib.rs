@@ -55,12 +55,12 @@ pub struct Rng(pub u32, pub u32);
 
 impl Rng {
     /// The next number in [0, 1).
-    pub fn next(&mut self) -> f32 {
+    pub fn unit(&mut self) -> f32 {
         self.1 += 1;
         hirad_core::sampling::unit2(hirad_core::sampling::hash3(self.0, self.1, 0x7E57)).0
     }
     /// The next number in [lo, hi).
     pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
+        lo + (hi - lo) * self.unit()
     }
 }
