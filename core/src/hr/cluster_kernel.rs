@@ -6,6 +6,7 @@
 use super::ids::{Elem, Kind};
 use super::state::State;
 use crate::formfactor::{facing_side, point_polygon, point_polygon_light};
+use crate::limits::NONE;
 use crate::sampling::{hash3, point_on, unit2};
 use crate::visibility::Visibility;
 use core::f32::consts::PI;
@@ -217,4 +218,232 @@ pub(crate) fn box_light(x: Vec3, min: Vec3, max: Vec3) -> (f32, Vec3) {
         phi += p;
     });
     (omega, phi)
+}
+
+/// True when a link from the large cluster `emit` to `recv` is evaluated by gathering
+/// ([`gathered`]): the receiver lies within two of the emitter's radii of its centre, where
+/// a volume of uniform radiance misjudges both how much its near and far parts bring and how
+/// much of them a point sees.
+pub(crate) fn near_field(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
+    if emit.kind() != Kind::Cluster || small_cluster(st, ws, emit) {
+        return false;
+    }
+    let c = st.cluster(ws, emit.index());
+    let (lo, hi) = (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max));
+    let r_e = 0.5 * (hi - lo).length();
+    let (cr, rr) = match st.shape(ws, recv) {
+        super::state::Shape::Cluster { min, max, .. } => {
+            ((min + max) * 0.5, 0.5 * (max - min).length())
+        }
+        super::state::Shape::Patch { corners, n, .. } => {
+            let mut s = Vec3::ZERO;
+            for c in &corners[..n] {
+                s += *c;
+            }
+            let m = s / n as f32;
+            let r = corners[..n]
+                .iter()
+                .fold(0.0f32, |a, c| a.max((*c - m).length()));
+            (m, r)
+        }
+        super::state::Shape::Source { .. } => return false,
+    };
+    ((lo + hi) * 0.5 - cr).length() < 2.0 * r_e + rr
+}
+
+/// Where a point receives: on one side (the plane's normal), or on the sides of the polygon
+/// it lies on (its normal and how many sides it has).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Plane {
+    Facing(Vec3),
+    Sides(Vec3, usize),
+}
+
+/// What the surfaces of cluster `e` bring the point `x`, polygon by polygon, estimated by
+/// descent: each of `rays` samples walks down `e`'s tree choosing a child in proportion to
+/// a cheap guess of what it brings (its area over its squared distance, nothing from a box
+/// wholly behind a receiving plane), ends on one polygon and takes its exact form factor to
+/// the receiving side(s) at `x` (summed over the sides a receiving polygon has) times one
+/// visibility ray to it, divided by the probability of the walk. The mean is the visible
+/// form factor of the cluster's polygons, unbiased whatever the guesses: close by, a volume
+/// of uniform radiance misjudges both how much its near and far leaves bring and how much of
+/// them `x` sees (a plant's neighbours got a quarter of its light). Returns the estimate, the
+/// light's mean direction (towards the emitter; length: its collimation) and the same
+/// without occlusion.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn gathered<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    x: Vec3,
+    plane: Plane,
+    skip: u32,
+    seed: u32,
+    rays: u32,
+    vis: &V,
+) -> (f32, Vec3, f32) {
+    let nr = match plane {
+        Plane::Facing(n) => Some(n),
+        Plane::Sides(n, 1) => Some(n),
+        Plane::Sides(..) => None,
+    };
+    let n = rays.max(1);
+    let (mut sum, mut dir, mut open) = (0.0f32, Vec3::ZERO, 0.0f32);
+    for j in 0..n {
+        let mut h = hash3(seed, j, 0xDE5C);
+        let mut cur = e;
+        let mut weight = 1.0f32;
+        // Down to a polygon.
+        let mut found = false;
+        for _ in 0..4096 {
+            if cur.kind() != Kind::Cluster {
+                found = true;
+                break;
+            }
+            let c = st.cluster(ws, cur.index());
+            let mut total = 0.0f32;
+            let mut guesses = [0.0f32; 16];
+            let kids = c.child_count.min(16);
+            for k in 0..kids {
+                let g = guess(st, ws, st.child(ws, c.children + k), x, nr);
+                guesses[k as usize] = g;
+                total += g;
+            }
+            if total <= 0.0 || !total.is_finite() {
+                break;
+            }
+            h = hash3(h, cur.0, 0xD1);
+            let target = (h >> 8) as f32 * (1.0 / 16_777_216.0) * total;
+            let (mut acc, mut pick) = (0.0f32, NONE);
+            for k in 0..kids {
+                let g = guesses[k as usize];
+                if g <= 0.0 {
+                    continue;
+                }
+                pick = k;
+                acc += g;
+                if target < acc {
+                    break;
+                }
+            }
+            if pick == NONE {
+                break;
+            }
+            weight *= total / guesses[pick as usize];
+            cur = st.child(ws, c.children + pick);
+        }
+        if !found {
+            continue;
+        }
+        // One polygon (a root patch).
+        let p = st.patch(ws, cur);
+        let rec = st.polygon(ws, p.poly);
+        let normal = Vec3::from(rec.normal);
+        let mut corners = [Vec3::ZERO; 4];
+        for (c, src) in corners.iter_mut().zip(p.corners) {
+            *c = src.into();
+        }
+        let corners = &corners[..p.corner_count()];
+        let Some(side) = facing_side(x, corners[0], normal) else {
+            continue;
+        };
+        if side >= State::sides(cur) {
+            continue;
+        }
+        let value = match plane {
+            Plane::Facing(n) | Plane::Sides(n, 1) => point_polygon(x, n, corners),
+            Plane::Sides(n, _) => point_polygon(x, n, corners) + point_polygon(x, -n, corners),
+        };
+        if !(value.is_finite() && value > 0.0) {
+            continue;
+        }
+        let (omega, phi) = point_polygon_light(x, corners);
+        let towards = if omega.is_finite() && omega > 0.0 {
+            phi * (PI / omega)
+        } else {
+            Vec3::ZERO
+        };
+        let mut y = corners[0];
+        for t in 0..4 {
+            let (u, v) = unit2(hash3(h, t, 0xB8));
+            y = point_on(corners, u, v);
+            if nr.is_none_or(|nr| nr.dot(y - x) > 0.0) {
+                break;
+            }
+        }
+        let seen = vis.transmittance(x, y, [skip, p.poly]);
+        open += weight * value;
+        sum += weight * value * seen;
+        dir += towards * (weight * value * seen);
+    }
+    let inv = 1.0 / n as f32;
+    let mean = if sum > 0.0 { dir / sum } else { Vec3::ZERO };
+    (sum * inv, mean, open * inv)
+}
+
+/// The area through which cluster `c`'s polygons take a cone of light of unit flux density
+/// whose axis and collimation are `dir`'s (m^2): each polygon's area times its share on
+/// every side it has (see `oriented::share`), so that a link's power divided by it is the
+/// flux density that hands its polygons exactly that power.
+pub(crate) fn shared_area(st: &State, ws: &[u8], cluster: u32, dir: Vec3) -> f32 {
+    let c = st.cluster(ws, cluster);
+    let collimation = dir.length().min(1.0);
+    let axis = dir.normalize_or_zero();
+    let mut sum = 0.0f32;
+    for k in c.first_polygon..c.first_polygon + c.polygons {
+        let poly = st.ordered(ws, k);
+        let rec = st.polygon(ws, poly);
+        let root = Elem(rec.root);
+        let t = if collimation > 0.0 {
+            Vec3::from(rec.normal).dot(axis)
+        } else {
+            0.0
+        };
+        let p = st.patch(ws, root);
+        let mut share = super::cone::cone_share(collimation, t);
+        if State::sides(root) == 2 {
+            share += super::cone::cone_share(collimation, -t);
+        }
+        sum += p.area * share;
+    }
+    sum
+}
+
+/// A cheap guess of what element `e` brings the point `x` (receiving plane normal `nr`):
+/// its area over its squared distance (plus its radius squared, so that a box around `x`
+/// stays finite), nothing when its box lies wholly behind the receiving plane.
+fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: Option<Vec3>) -> f32 {
+    let (lo, hi, a) = match e.kind() {
+        Kind::Cluster => {
+            let c = st.cluster(ws, e.index());
+            (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max), c.area)
+        }
+        Kind::Source => return 0.0,
+        _ => {
+            let p = st.patch(ws, e);
+            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            for c in &p.corners[..p.corner_count()] {
+                lo = lo.min(Vec3::from(*c));
+                hi = hi.max(Vec3::from(*c));
+            }
+            (lo, hi, p.area)
+        }
+    };
+    if a <= 0.0 {
+        return 0.0;
+    }
+    if let Some(nr) = nr {
+        // The box corner farthest along the normal.
+        let far = Vec3::new(
+            if nr.x > 0.0 { hi.x } else { lo.x },
+            if nr.y > 0.0 { hi.y } else { lo.y },
+            if nr.z > 0.0 { hi.z } else { lo.z },
+        );
+        if nr.dot(far - x) <= 0.0 {
+            return 0.0;
+        }
+    }
+    let c = (lo + hi) * 0.5;
+    let r2 = 0.25 * (hi - lo).length_squared();
+    a / ((c - x).length_squared() + r2).max(f32::MIN_POSITIVE)
 }

@@ -11,11 +11,11 @@
 //! two elements, so a link's value never depends on when or on which thread it is computed.
 
 use super::cluster_kernel::{
-    box_form_factor, box_light, box_projected_area, cluster_form_factor, cluster_light, outside,
-    small_cluster,
+    Plane, box_form_factor, box_light, box_projected_area, cluster_form_factor, cluster_light,
+    gathered, near_field, outside, shared_area, small_cluster,
 };
 use super::ids::Elem;
-use super::sample::{point_facing, point_in};
+use super::sample::{point_facing, point_toward};
 use super::state::{Shape, State};
 use crate::formfactor::{facing_side, point_polygon, point_polygon_light};
 use crate::limits::NONE;
@@ -25,6 +25,8 @@ use crate::sampling::{
 use crate::visibility::Visibility;
 use core::f32::consts::PI;
 use glam::Vec3;
+
+const NEAR_GATHER: bool = true;
 
 /// Coefficients of one link, by receiving side and emitting side.
 #[derive(Clone, Copy, Debug, Default)]
@@ -44,6 +46,9 @@ pub(crate) struct Coefficients {
     /// value at its quadrature points, per receiving side, the larger side): the error of
     /// taking it as constant there.
     pub spread: f32,
+    /// The coefficients with occlusion summed over sides, from the refinement's samples
+    /// (see [`evaluate`]).
+    pub seen: f32,
 }
 
 /// Receiving sides of an element: both for a two-sided patch, the front otherwise (the back
@@ -88,6 +93,16 @@ pub(crate) fn exposed_quadrature(
     m
 }
 
+/// A link's coefficients, and what refinement decides by (`open`, `seen`, `partial`,
+/// `spread`) from samples of their own.
+///
+/// Refinement keeps a link whose estimated transfer is small and splits one whose estimate
+/// is large. Judged on the very samples the light then goes by, a link whose few samples
+/// happened to see too little is kept and one that saw too much is split and estimated
+/// again: the links that remain are biased low (in canopies, where many links lie near the
+/// threshold and a few rays see a leaf or not, a third of the light went missing; in closed
+/// rooms, where the hidden part of a link drives its splitting, the bias was the other way
+/// and made light). Two independent estimates make the choice blind to the one kept.
 pub(crate) fn evaluate<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
@@ -95,19 +110,51 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
     emit: Elem,
     vis: &V,
 ) -> Coefficients {
+    let seed = hash3(recv.0, emit.0, 0x11AD);
+    let rays = st.settings.rays.max(1);
+    let mut out = evaluate_seeded(st, ws, recv, emit, vis, seed, rays);
+    // The choice needs only an idea of the size: a quarter of the rays.
+    let d = evaluate_seeded(
+        st,
+        ws,
+        recv,
+        emit,
+        vis,
+        hash3(seed, 0xDEC1DE, 0x5EE),
+        rays.div_ceil(4),
+    );
+    out.open = d.open;
+    out.partial = d.partial;
+    out.spread = d.spread;
+    out.seen = d.k.iter().flatten().sum();
+    out.rays += d.rays;
+    out
+}
+
+pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    emit: Elem,
+    vis: &V,
+    seed: u32,
+    rays: u32,
+) -> Coefficients {
     let r = st.shape(ws, recv);
     let e = st.shape(ws, emit);
-    let rays = st.settings.rays.max(1);
     let mut out = Coefficients {
         exact: small_cluster(st, ws, emit),
         ..Coefficients::default()
     };
-    let seed = hash3(recv.0, emit.0, 0x11AD);
     // The direction in which the gather takes an emitting cluster's radiance (see
     // `oriented::radiosity_towards`): its kernel is scaled by its projected area that way, so
     // that kernel x emission is the box's form factor x the radiance it sends that way.
     let towards = (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit))
         .normalize_or_zero();
+    if NEAR_GATHER && near_field(st, ws, recv, emit) {
+        gather_link(st, ws, recv, &r, emit, seed, rays, vis, &mut out);
+        return out;
+    }
     match r {
         Shape::Patch {
             corners,
@@ -170,10 +217,13 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
             };
             let (mut seen, mut facing) = (0.0f32, 0.0f32);
             let mut deferred = [(0.0f32, Vec3::ZERO); 2];
+            let (aim, reach) = reach_of(st, ws, emit);
             for k in 0..rays {
-                let (x, px) = point_in(st, ws, recv, hash3(seed, k, 0xC1));
+                let (x, px, w) = point_toward(st, ws, recv, aim, reach, hash3(seed, k, 0xC1));
                 let (f, open, s_side, v, d) =
                     flux_at(st, ws, x, px, &e, emit, towards, hash3(seed, k, 0xE1), vis);
+                // Area-mean estimates: each sample weighted by its area over sampling density.
+                let (f, open) = (f * w, open * w);
                 out.rays += (f > 0.0 || open > 0.0) as u32;
                 out.open += inv * open;
                 let turned_away = at.is_some_and(|c| {
@@ -211,6 +261,134 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
         Shape::Source { .. } => {}
     }
     out
+}
+
+/// A link from a large cluster close by, gathered (see `cluster_kernel::gathered`): at the
+/// receiver's quadrature points (per receiving side) or at `rays` points of a receiving
+/// cluster's surfaces, `rays` rays each, counting what meets the emitter's polygons first.
+/// The coefficients multiply the mean radiosity of the emitter's polygons facing the
+/// receiver (`exact`). A sample of a receiving cluster on a one-sided face turned away from
+/// the emitter is hidden from it by its own object, which the polygons' shares already
+/// leave dark: it takes the mean of the samples on faces that can take the light.
+#[allow(clippy::too_many_arguments)]
+fn gather_link<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    r: &Shape,
+    emit: Elem,
+    seed: u32,
+    rays: u32,
+    vis: &V,
+    out: &mut Coefficients,
+) {
+    out.exact = true;
+    // Judged by the light it would bring unoccluded: a few visibility rays into a volume of
+    // leaves see little or nothing more often than not, and a large link kept on that
+    // ground carries its whole noise.
+    out.partial = true;
+    match *r {
+        Shape::Patch {
+            corners,
+            n,
+            normal,
+            poly,
+            ..
+        } => {
+            let (mut pts, mut plain) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+            let m = quadrature(&corners[..n], &mut pts, &mut plain);
+            let rp = st.patch(ws, recv);
+            let mut wts = [0.0f32; MAX_QUADRATURE];
+            exposed_quadrature(&rp, &corners[..n], &mut pts, &mut wts);
+            let (mut lo, mut hi) = ([f32::INFINITY; 2], [0.0f32; 2]);
+            for q in 0..m {
+                let (x, w) = (pts[q], wts[q]);
+                out.partial |= w == 0.0;
+                for side in 0..recv_sides(r) {
+                    let nr = if side == 0 { normal } else { -normal };
+                    let qs = hash3(seed, q as u32, side as u32);
+                    let (k, _, open) =
+                        gathered(st, ws, emit, x, Plane::Facing(nr), poly, qs, rays, vis);
+                    out.rays += rays;
+                    out.open += plain[q] * open;
+                    if w == 0.0 {
+                        continue;
+                    }
+                    out.k[side][0] += w * k;
+                    lo[side] = lo[side].min(k);
+                    hi[side] = hi[side].max(k);
+                }
+            }
+            for side in 0..recv_sides(r) {
+                if hi[side] > 0.0 {
+                    out.spread = out.spread.max(hi[side] - lo[side].min(hi[side]));
+                }
+            }
+        }
+        Shape::Cluster { area: r_area, .. } => {
+            // The power the receiver's surfaces take, from the irradiance on the planes of
+            // points drawn over them (towards the emitter, weighted back to area means).
+            let (at, reach) = reach_of(st, ws, emit);
+            let (mut power, mut dir, mut open) = (0.0f32, Vec3::ZERO, 0.0f32);
+            for k in 0..rays {
+                let (x, px, w) = point_toward(st, ws, recv, at, reach, hash3(seed, k, 0xC1));
+                if px >= st.polygons {
+                    continue;
+                }
+                let rec = st.polygon(ws, px);
+                let sides = State::sides(Elem(rec.root));
+                let (irr, d, o) = gathered(
+                    st,
+                    ws,
+                    emit,
+                    x,
+                    Plane::Sides(Vec3::from(rec.normal), sides),
+                    px,
+                    hash3(seed, k, 0xE1),
+                    rays,
+                    vis,
+                );
+                out.rays += rays;
+                power += w * irr;
+                open += w * o;
+                dir += d * (w * irr);
+            }
+            let inv = r_area / rays as f32;
+            let (power, open) = (power * inv, open * inv);
+            let mean = if power > 0.0 {
+                dir * (inv / power)
+            } else {
+                Vec3::ZERO
+            };
+            // The flux density that the polygons' shares of this cone turn into that power.
+            let taken = shared_area(st, ws, recv.index(), mean);
+            if taken > 0.0 {
+                out.k[0][0] = power / taken;
+                out.open = open / taken;
+            }
+            out.dir = mean;
+        }
+        Shape::Source { .. } => {}
+    }
+}
+
+/// Where an emitter sits and how far it reaches (its centre and radius, m): where the points
+/// of a receiving cluster are drawn towards ([`point_toward`]).
+fn reach_of(st: &State, ws: &[u8], emit: Elem) -> (Vec3, f32) {
+    match st.shape(ws, emit) {
+        Shape::Cluster { min, max, .. } => ((min + max) * 0.5, 0.5 * (max - min).length()),
+        Shape::Patch {
+            corners, n, area, ..
+        } => {
+            let mut sum = Vec3::ZERO;
+            for c in &corners[..n] {
+                sum += *c;
+            }
+            (sum / n as f32, libm::sqrtf(area))
+        }
+        // A direction: every part of the receiver alike.
+        Shape::Source { .. } => (Vec3::ZERO, f32::INFINITY),
+    }
 }
 
 /// A patch's coefficients from a smaller patch, by reciprocity: the emitter's form factors

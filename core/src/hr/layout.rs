@@ -72,9 +72,10 @@ impl Strides {
     }
 
     /// Floats an evaluated link hands back: its coefficients, the open coefficient, the
-    /// partial-visibility flag, the rays cast, the light's mean direction and the spread.
+    /// partial-visibility flag, the rays cast, the light's mean direction, the spread, the
+    /// exact flag and the refinement's visible coefficient.
     pub(crate) fn eval_out(&self) -> usize {
-        self.link_k + 8
+        self.link_k + 9
     }
 
     /// Floats a gathered receiver hands back: irradiance per side and band.

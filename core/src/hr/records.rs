@@ -137,9 +137,13 @@ pub(crate) struct Link {
     pub next: u32,
     /// `PENDING`, `EXAMINED`, `PARTIAL` bits.
     pub flags: u32,
-    /// The same coefficients without occlusion, summed over sides (drives refinement of
-    /// partly or wholly hidden links).
+    /// The coefficients without occlusion, summed over sides: drives refinement (see
+    /// `refine::decide`). Like `k_seen`, `spread` and `PARTIAL`, it comes from samples apart
+    /// from those of the coefficients the light goes by, so that which links are kept does
+    /// not depend on how their own estimates fell.
     pub k_open: f32,
+    /// The coefficients with occlusion, summed over sides, from the refinement's samples.
+    pub k_seen: f32,
     /// For a receiving cluster: the mean direction of the light from the emitter, weighted
     /// by its flux density, over the flux density (length 1 for a beam, less for light from
     /// a wide emitter; see `oriented`). Zero otherwise.

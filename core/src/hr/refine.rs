@@ -45,6 +45,7 @@ pub(crate) fn add_link(
             next: head,
             flags,
             k_open: 0.0,
+            k_seen: 0.0,
             dir: [0.0; 3],
             spread: 0.0,
         },
@@ -133,6 +134,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 o[kk + 3..kk + 6].copy_from_slice(&co.dir.to_array());
                 o[kk + 6] = co.spread;
                 o[kk + 7] = if co.exact { 1.0 } else { 0.0 };
+                o[kk + 8] = co.seen;
             }
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
@@ -146,6 +148,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 l.k_open = o[kk];
                 l.dir = [o[kk + 3], o[kk + 4], o[kk + 5]];
                 l.spread = o[kk + 6];
+                l.k_seen = o[kk + 8];
                 l.flags = (l.flags & !(PENDING | EXACT))
                     | if o[kk + 1] != 0.0 { PARTIAL } else { 0 }
                     | if o[kk + 7] != 0.0 { EXACT } else { 0 };
@@ -413,12 +416,12 @@ fn decide(
     recv: Elem,
     emit: Elem,
     l: &Link,
-    i: u32,
     rs: &Shape,
     es: &Shape,
     threshold: f32,
 ) -> Option<bool> {
-    let k: f32 = st.link_k(ws, i).iter().sum();
+    // Only what the refinement's own samples saw (see `eval::evaluate`).
+    let k = l.k_seen;
     let k_eff = if l.flags & PARTIAL != 0 { l.k_open } else { k };
     let b = b_max(st, ws, emit);
     let area = receiving_area(rs);
@@ -566,7 +569,7 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                 } else if dark {
                     Some(split_link(st, ws, recv, emit, true))
                 } else {
-                    decide(st, ws, recv, emit, &l, cur, &rs, &es, threshold)
+                    decide(st, ws, recv, emit, &l, &rs, &es, threshold)
                         .map(|on_recv| split_link(st, ws, recv, emit, on_recv))
                 };
                 match split {
