@@ -163,7 +163,9 @@ pub(crate) fn cap_mean(c: f32, t: f32) -> f32 {
 }
 
 /// Gives every cluster of more than [`BINNED`] polygons its bins, while the workspace has
-/// room (a cluster without them sums its polygons: slower, and exact).
+/// room (a cluster without them sums its polygons: slower, and exact): two records, its
+/// power (see [`update`]) and its exposed area by normal, which does not change (see
+/// [`mean_facing`]).
 pub(crate) fn allocate(st: &mut State, ws: &mut [u8]) {
     for i in 0..st.clusters {
         let mut c = st.cluster(ws, i);
@@ -171,8 +173,8 @@ pub(crate) fn allocate(st: &mut State, ws: &mut [u8]) {
             continue;
         }
         let mut blocks = st.blocks;
-        let Some(k) = st.bins.alloc_run(ws, &mut blocks, 1) else {
-            return;
+        let Some(k) = st.bins.alloc_run(ws, &mut blocks, 2) else {
+            break;
         };
         st.blocks = blocks;
         c.bins = k;
@@ -180,11 +182,21 @@ pub(crate) fn allocate(st: &mut State, ws: &mut [u8]) {
     }
 }
 
+/// Fills the area bins (once the polygons' exposed parts are known; they do not change).
+pub(crate) fn areas(st: &State, ws: &mut [u8]) {
+    fill(st, ws, true, 1);
+}
+
 /// Recomputes the bins of every cluster that has them from its polygons' powers (with
 /// `unit`, their exposed areas: every emitting side at radiosity 1, see `closure`).
 /// Children come after their parents in cluster order, so one reverse pass adds each
 /// child's bins to its parent's.
 pub(crate) fn update(st: &State, ws: &mut [u8], unit: bool) {
+    fill(st, ws, unit, 0);
+}
+
+/// [`update`] into record `record` of each cluster's two (0 power, 1 area).
+fn fill(st: &State, ws: &mut [u8], unit: bool, record: u32) {
     let nb = st.bands;
     let len = bin_floats(nb);
     let mut acc = [0.0f32; BINS * crate::limits::MAX_BANDS * 4];
@@ -200,7 +212,7 @@ pub(crate) fn update(st: &State, ws: &mut [u8], unit: bool) {
                 Kind::Cluster => {
                     let cc = st.cluster(ws, child.index());
                     if cc.bins != NONE {
-                        for (a, v) in acc[..len].iter_mut().zip(of(st, ws, cc.bins)) {
+                        for (a, v) in acc[..len].iter_mut().zip(of(st, ws, cc.bins + record)) {
                             *a += v;
                         }
                     } else {
@@ -215,8 +227,31 @@ pub(crate) fn update(st: &State, ws: &mut [u8], unit: bool) {
                 }
             }
         }
-        let at = st.bins.at(ws, &st.blocks, c.bins);
+        let at = st.bins.at(ws, &st.blocks, c.bins + record);
         super::pool::floats_mut(ws, at, len).copy_from_slice(&acc[..len]);
+    }
+}
+
+/// The mean radiosity (per band) of a binned cluster's emitting sides facing `w`, weighted
+/// by exposed area times cosine: its power bins over its area bins towards `w` (see
+/// `oriented::mean_facing`, which sums the polygons). Zero when nothing faces `w`; 1 for
+/// every band with `unit` where something does.
+pub(crate) fn mean_facing(st: &State, ws: &[u8], bins: u32, w: Vec3, unit: bool, out: &mut [f32]) {
+    let nb = st.bands;
+    let mut area = [0.0f32; crate::limits::MAX_BANDS];
+    emission(of(st, ws, bins + 1), nb, w, &mut area[..nb]);
+    let a = area[0];
+    out.fill(0.0);
+    if !(a > 0.0) {
+        return;
+    }
+    if unit {
+        out.fill(1.0);
+        return;
+    }
+    emission(of(st, ws, bins), nb, w, out);
+    for o in out.iter_mut() {
+        *o /= a;
     }
 }
 

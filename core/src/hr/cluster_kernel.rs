@@ -14,6 +14,7 @@ use glam::Vec3;
 
 /// Clusters of at most this many polygons are seen polygon by polygon (exactly) from a
 /// receiver; larger ones as a point-like volume.
+const ALWAYS_NEAR: bool = false;
 pub(crate) const SMALL_CLUSTER: u32 = 32;
 
 /// True for a cluster whose polygons links evaluate one by one.
@@ -248,7 +249,7 @@ pub(crate) fn near_field(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool 
         }
         super::state::Shape::Source { .. } => return false,
     };
-    ((lo + hi) * 0.5 - cr).length() < 2.0 * r_e + rr
+    ((lo + hi) * 0.5 - cr).length() < 2.0 * r_e + rr || ALWAYS_NEAR
 }
 
 /// Where a point receives: on one side (the plane's normal), or on the sides of the polygon
@@ -264,7 +265,7 @@ pub(crate) enum Plane {
 /// a cheap guess of what it brings (its area over its squared distance, nothing from a box
 /// wholly behind a receiving plane), ends on one polygon and takes its exact form factor to
 /// the receiving side(s) at `x` (summed over the sides a receiving polygon has) times one
-/// visibility ray to it, divided by the probability of the walk. The mean is the visible
+/// visibility ray to it (none without `occlude`), divided by the probability of the walk. The mean is the visible
 /// form factor of the cluster's polygons, unbiased whatever the guesses: close by, a volume
 /// of uniform radiance misjudges both how much its near and far leaves bring and how much of
 /// them `x` sees (a plant's neighbours got a quarter of its light). Returns the estimate, the
@@ -280,6 +281,7 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
     skip: u32,
     seed: u32,
     rays: u32,
+    occlude: bool,
     vis: &V,
 ) -> (f32, Vec3, f32) {
     let nr = match plane {
@@ -371,7 +373,11 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
                 break;
             }
         }
-        let seen = vis.transmittance(x, y, [skip, p.poly]);
+        let seen = if occlude {
+            vis.transmittance(x, y, [skip, p.poly])
+        } else {
+            1.0
+        };
         open += weight * value;
         sum += weight * value * seen;
         dir += towards * (weight * value * seen);

@@ -264,19 +264,20 @@ fn cells_for(st: &State, area: f32) -> u32 {
 }
 
 /// Sky samples of a patch whose area is `ratio` times the scene's typical polygon:
-/// `16 x rays` for one of typical size, growing as the square of the ratio, at most 4096.
-/// Each sample tests one direction, so a side's sky light is a plain Monte Carlo estimate
-/// with a relative noise of about `sqrt((1 - p) / (p N))` at a lit fraction `p`; a patch
-/// larger than the polygons that shadow it (soil under leaves) is worth more samples, and
-/// such patches are few. Measured under random canopies of LAI 2: see `tests/sunlight.rs`.
+/// `8 x rays` for one of typical size (32 at the default), growing as the ratio to the
+/// power 2.5, at most 4096. Each sample tests one direction, so a side's sky light is a
+/// plain Monte Carlo estimate with a relative noise of about `sqrt((1 - p) / (p N))` at a
+/// lit fraction `p`; a patch larger than the polygons that shadow it (soil under leaves)
+/// is worth more samples, and such patches are few. Measured under random canopies of
+/// LAI 2: see `tests/sunlight.rs`.
 fn sky_samples(ratio: f32, rays: u32) -> u32 {
-    let base = 16.0 * rays.max(1) as f32;
+    let base = 8.0 * rays.max(1) as f32;
     let r = if ratio.is_finite() {
         ratio.max(1.0)
     } else {
         1.0
     };
-    (base * r * r).clamp(base, 4096.0) as u32
+    (base * r * r * libm::sqrtf(r)).clamp(base, 4096.0) as u32
 }
 
 /// True when every ray from `x` (on polygon `poly`, front normal `n`) meets the back of a

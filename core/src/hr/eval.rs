@@ -27,6 +27,7 @@ use core::f32::consts::PI;
 use glam::Vec3;
 
 const NEAR_GATHER: bool = true;
+const CLUSTER_POWER: bool = true;
 
 /// Coefficients of one link, by receiving side and emitting side.
 #[derive(Clone, Copy, Debug, Default)]
@@ -112,17 +113,34 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
 ) -> Coefficients {
     let seed = hash3(recv.0, emit.0, 0x11AD);
     let rays = st.settings.rays.max(1);
-    let mut out = evaluate_seeded(st, ws, recv, emit, vis, seed, rays);
-    // The choice needs only an idea of the size: a quarter of the rays.
-    let d = evaluate_seeded(
-        st,
-        ws,
-        recv,
-        emit,
-        vis,
-        hash3(seed, 0xDEC1DE, 0x5EE),
-        rays.div_ceil(4),
-    );
+    let mut out = evaluate_seeded(st, ws, recv, emit, vis, seed, rays, true);
+    // The choice needs an idea of the size: a quarter of the rays, or, where the light is
+    // gathered polygon by polygon, as many samples as the light goes by, without occlusion
+    // (no rays: a few samples of a large receiver under a few lamps land where they do not
+    // shine more often than not, and the whole lamps' light was then judged by nothing).
+    let d = if gathered_link(st, ws, recv, emit) {
+        evaluate_seeded(
+            st,
+            ws,
+            recv,
+            emit,
+            vis,
+            hash3(seed, 0xDEC1DE, 0x5EE),
+            rays,
+            false,
+        )
+    } else {
+        evaluate_seeded(
+            st,
+            ws,
+            recv,
+            emit,
+            vis,
+            hash3(seed, 0xDEC1DE, 0x5EE),
+            rays.div_ceil(4),
+            true,
+        )
+    };
     out.open = d.open;
     out.partial = d.partial;
     out.spread = d.spread;
@@ -131,6 +149,18 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
     out
 }
 
+/// True when link `recv <- emit` is evaluated polygon by polygon ([`gather_link`]): from a
+/// large cluster close by, or to a cluster.
+fn gathered_link(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
+    NEAR_GATHER
+        && emit.kind() != super::ids::Kind::Source
+        && (near_field(st, ws, recv, emit)
+            || (CLUSTER_POWER && recv.kind() == super::ids::Kind::Cluster))
+}
+
+/// One estimate of a link's coefficients from `seed`, with `rays` rays per point; without
+/// `occlude`, a gathered link ([`gather_link`]) casts no rays and gives its open value.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
@@ -139,6 +169,7 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
     vis: &V,
     seed: u32,
     rays: u32,
+    occlude: bool,
 ) -> Coefficients {
     let r = st.shape(ws, recv);
     let e = st.shape(ws, emit);
@@ -151,8 +182,8 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
     // that kernel x emission is the box's form factor x the radiance it sends that way.
     let towards = (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit))
         .normalize_or_zero();
-    if NEAR_GATHER && near_field(st, ws, recv, emit) {
-        gather_link(st, ws, recv, &r, emit, seed, rays, vis, &mut out);
+    if gathered_link(st, ws, recv, emit) {
+        gather_link(st, ws, recv, &r, emit, seed, rays, occlude, vis, &mut out);
         return out;
     }
     match r {
@@ -279,6 +310,7 @@ fn gather_link<V: Visibility + ?Sized>(
     emit: Elem,
     seed: u32,
     rays: u32,
+    occlude: bool,
     vis: &V,
     out: &mut Coefficients,
 ) {
@@ -307,8 +339,18 @@ fn gather_link<V: Visibility + ?Sized>(
                 for side in 0..recv_sides(r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
-                    let (k, _, open) =
-                        gathered(st, ws, emit, x, Plane::Facing(nr), poly, qs, rays, vis);
+                    let (k, _, open) = gathered(
+                        st,
+                        ws,
+                        emit,
+                        x,
+                        Plane::Facing(nr),
+                        poly,
+                        qs,
+                        rays,
+                        occlude,
+                        vis,
+                    );
                     out.rays += rays;
                     out.open += plain[q] * open;
                     if w == 0.0 {
@@ -346,6 +388,7 @@ fn gather_link<V: Visibility + ?Sized>(
                     px,
                     hash3(seed, k, 0xE1),
                     rays,
+                    occlude,
                     vis,
                 );
                 out.rays += rays;

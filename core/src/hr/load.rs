@@ -196,6 +196,7 @@ fn new_cluster(s: &mut State, ws: &mut [u8], parent: u32) -> Result<u32, HrError
         polygons: 0,
         first_polygon: 0,
         bins: NONE,
+        peak: 0.0,
     };
     s.set_cluster(ws, i, &c);
     let e = Elem::new(Kind::Cluster, i);

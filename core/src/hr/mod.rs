@@ -305,8 +305,9 @@ fn plan_from<S: SceneSource>(
     } else {
         st.patch1 as f64
     };
-    // Emission bins: at most one cluster in 16 polygons is large enough to keep them.
-    let bins = polys / 16.0 * st.bins as f64;
+    // Emission bins (power and area): at most one cluster in 16 polygons is large enough to
+    // keep them.
+    let bins = polys / 16.0 * 2.0 * st.bins as f64;
     let grow = patches * patch_avg + links * st.link as f64 + bins;
     let suggested = (min_bytes as f64 + grow * 1.05)
         .max(16.0 * 1024.0 * 1024.0)
@@ -466,6 +467,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             scratch,
         };
         direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+        bins::areas(&st, ws);
         direct::test_closed(&mut st, ws, &vis);
         if let Some(band) = direct::no_steady_state(&st, ws) {
             return Err(HrError::NoSteadyState { band: band as u32 });
@@ -672,6 +674,7 @@ pub mod bench {
             crate::limits::NONE,
             7,
             rays,
+            true,
             vis,
         );
         // Hit or miss.
@@ -736,46 +739,9 @@ pub mod bench {
             vis,
             seed,
             rays,
+            true,
         )
         .k
-    }
-
-    /// Points drawn in the cluster holding `poly` (`up` levels above) towards `target`,
-    /// with what each gathers from cluster `from`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn probe_points<V: Visibility + ?Sized>(
-        snap: &Snapshot,
-        workspace: &mut [u8],
-        vis: &V,
-        poly: u32,
-        up: u32,
-        target: glam::Vec3,
-        reach: f32,
-        from: u32,
-        mut f: impl FnMut(glam::Vec3, u32, f32, f32),
-    ) {
-        let ws = aligned(workspace);
-        let (ws, _, _) = parts(&snap.0.lay, ws, 0).expect("the workspace of the snapshot");
-        let st = &snap.0;
-        let mut at = ids::Elem(st.patch(ws, ids::Elem(st.polygon(ws, poly).root)).parent);
-        for _ in 0..up {
-            at = ids::Elem::new(ids::Kind::Cluster, st.cluster(ws, at.index()).parent);
-        }
-        for k in 0..16 {
-            let (x, p, w) = sample::point_toward(st, ws, at, target, reach, k * 7 + 1);
-            let g = cluster_kernel::gathered(
-                st,
-                ws,
-                ids::Elem(from),
-                x,
-                cluster_kernel::Plane::Facing(glam::Vec3::Z),
-                p,
-                k,
-                64,
-                vis,
-            );
-            f(x, p, w, g.0);
-        }
     }
 
     /// An element as the diagnostics see it: 0 cluster, 1 one-sided patch, 2 two-sided

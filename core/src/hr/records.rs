@@ -86,6 +86,9 @@ pub(crate) struct Cluster {
     pub first_polygon: u32,
     /// Its emission bins (see `bins`) in the bins pool, or NONE.
     pub bins: u32,
+    /// The largest radiosity of its polygons (W/m^2, any side and band), as of the last
+    /// pull: what a link from it may bring where its light is uneven (see `refine`).
+    pub peak: f32,
 }
 
 /// A directional source: a sun or one sky direction.

@@ -208,8 +208,14 @@ fn kind_slot(k: Kind) -> usize {
     }
 }
 
-/// Largest radiosity of an element over its sides and bands (W/m^2).
+/// Largest radiosity of an element over its sides and bands (W/m^2); of a cluster, the
+/// largest of its polygons': a cluster's link carries a mean radiosity, which is as wrong as
+/// the cluster is uneven (a ceiling of dark tiles with a few lamps in it lit a plant below
+/// with a third of their light, the mean of lamps and tiles being far below the threshold).
 fn b_max(st: &State, ws: &[u8], e: Elem) -> f32 {
+    if e.kind() == Kind::Cluster {
+        return st.cluster(ws, e.index()).peak;
+    }
     let mut m = 0.0f32;
     for side in 0..2 {
         if let Some(b) = st.b(ws, e, side) {
@@ -557,8 +563,11 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                 // unless the emitter's plane hides the whole cluster, split it and look
                 // closer.
                 let dark = !self_link && l.k_open <= 0.0;
-                if dark && (recv.is_patch() || hidden_behind(&rs, &es) || !can_split(st, ws, recv))
-                {
+                // Only the exact open coefficient of a patch emitter proves a patch receiver
+                // dark; a cluster emitter's is sampled, and such a link stays (its light is
+                // estimated apart, see `eval::evaluate`).
+                let certain = recv.is_patch() && emit.is_patch();
+                if dark && (certain || hidden_behind(&rs, &es) || !can_split(st, ws, recv)) {
                     unlink(st, ws, recv, prev, cur, next);
                     free_link(st, ws, cur);
                     cur = next;
@@ -566,7 +575,7 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                 }
                 let split = if self_link {
                     Some(split_self(st, ws, recv))
-                } else if dark {
+                } else if dark && !recv.is_patch() {
                     Some(split_link(st, ws, recv, emit, true))
                 } else {
                     decide(st, ws, recv, emit, &l, &rs, &es, threshold)

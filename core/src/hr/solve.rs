@@ -466,12 +466,14 @@ fn pull_from(st: &State, ws: &mut [u8], extrapolate: f32, leaves_done: bool) -> 
         }
     }
     for i in (0..st.clusters).rev() {
-        let c = st.cluster(ws, i);
+        let mut c = st.cluster(ws, i);
         let mut power = [0.0f32; 8];
+        let mut peak = 0.0f32;
         for k in 0..c.child_count {
             let child = st.child(ws, c.children + k);
             if child.kind() == Kind::Cluster {
                 let cc = st.cluster(ws, child.index());
+                peak = peak.max(cc.peak);
                 if let Some(b) = st.b(ws, child, 0) {
                     for (p, v) in power.iter_mut().zip(b) {
                         *p += cc.area * v;
@@ -483,9 +485,14 @@ fn pull_from(st: &State, ws: &mut [u8], extrapolate: f32, leaves_done: bool) -> 
                     for (p, v) in power.iter_mut().zip(st.polygon_power(ws, poly, side)) {
                         *p += v;
                     }
+                    if let Some(b) = st.b(ws, child, side) {
+                        peak = b.iter().copied().fold(peak, f32::max);
+                    }
                 }
             }
         }
+        c.peak = peak;
+        st.set_cluster(ws, i, &c);
         let inv = if c.area > 0.0 { 1.0 / c.area } else { 0.0 };
         let b = st.b_mut(ws, Elem::new(Kind::Cluster, i), 0);
         for (d, p) in b.iter_mut().zip(&power[..nb]) {
