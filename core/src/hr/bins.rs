@@ -242,7 +242,7 @@ pub(crate) fn mean_facing(st: &State, ws: &[u8], bins: u32, w: Vec3, unit: bool,
     emission(of(st, ws, bins + 1), nb, w, &mut area[..nb]);
     let a = area[0];
     out.fill(0.0);
-    if !(a > 0.0) {
+    if a.is_nan() || a <= 0.0 {
         return;
     }
     if unit {

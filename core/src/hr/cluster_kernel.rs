@@ -14,7 +14,6 @@ use glam::Vec3;
 
 /// Clusters of at most this many polygons are seen polygon by polygon (exactly) from a
 /// receiver; larger ones as a point-like volume.
-const ALWAYS_NEAR: bool = false;
 pub(crate) const SMALL_CLUSTER: u32 = 32;
 
 /// True for a cluster whose polygons links evaluate one by one.
@@ -143,22 +142,6 @@ pub(crate) fn cluster_form_factor(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: V
     out
 }
 
-/// Solid angle and vector form factor at `x` of the polygons of a cluster that face it;
-/// the weights are the solid angles.
-pub(crate) fn cluster_light(st: &State, ws: &[u8], e: Elem, x: Vec3) -> (f32, Vec3, Facing) {
-    let (mut omega, mut phi) = (0.0f32, Vec3::ZERO);
-    let mut facing = Facing::new();
-    each_facing(st, ws, e, x, |k, _, c| {
-        let (o, p) = point_polygon_light(x, c);
-        if o.is_finite() {
-            omega += o;
-            phi += p;
-            facing.push(k, o);
-        }
-    });
-    (omega.min(4.0 * PI), phi, facing)
-}
-
 /// True when `x` lies outside the box (so that the box's faces seen from it are a proper
 /// silhouette).
 pub(crate) fn outside(x: Vec3, min: Vec3, max: Vec3) -> bool {
@@ -210,17 +193,6 @@ pub(crate) fn box_form_factor(x: Vec3, n: Vec3, min: Vec3, max: Vec3) -> f32 {
     sum.min(1.0)
 }
 
-/// Solid angle and vector form factor of a box's silhouette seen from an outside point.
-pub(crate) fn box_light(x: Vec3, min: Vec3, max: Vec3) -> (f32, Vec3) {
-    let (mut omega, mut phi) = (0.0f32, Vec3::ZERO);
-    box_faces(x, min, max, |c| {
-        let (o, p) = point_polygon_light(x, c);
-        omega += o;
-        phi += p;
-    });
-    (omega, phi)
-}
-
 /// True when a link from the large cluster `emit` to `recv` is evaluated by gathering
 /// ([`gathered`]): the receiver lies within two of the emitter's radii of its centre, where
 /// a volume of uniform radiance misjudges both how much its near and far parts bring and how
@@ -249,7 +221,7 @@ pub(crate) fn near_field(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool 
         }
         super::state::Shape::Source { .. } => return false,
     };
-    ((lo + hi) * 0.5 - cr).length() < 2.0 * r_e + rr || ALWAYS_NEAR
+    ((lo + hi) * 0.5 - cr).length() < 2.0 * r_e + rr
 }
 
 /// Where a point receives: on one side (the plane's normal), or on the sides of the polygon

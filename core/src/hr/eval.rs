@@ -11,13 +11,13 @@
 //! two elements, so a link's value never depends on when or on which thread it is computed.
 
 use super::cluster_kernel::{
-    Plane, box_form_factor, box_light, box_projected_area, cluster_form_factor, cluster_light,
-    gathered, near_field, outside, shared_area, small_cluster,
+    Plane, box_form_factor, box_projected_area, cluster_form_factor, gathered, near_field, outside,
+    shared_area, small_cluster,
 };
 use super::ids::Elem;
 use super::sample::{point_facing, point_toward};
 use super::state::{Shape, State};
-use crate::formfactor::{facing_side, point_polygon, point_polygon_light};
+use crate::formfactor::{facing_side, point_polygon};
 use crate::limits::NONE;
 use crate::sampling::{
     MAX_CLIPPED_QUADRATURE, MAX_QUADRATURE, clipped_quadrature, hash3, point_on, quadrature, unit2,
@@ -25,9 +25,6 @@ use crate::sampling::{
 use crate::visibility::Visibility;
 use core::f32::consts::PI;
 use glam::Vec3;
-
-const NEAR_GATHER: bool = true;
-const CLUSTER_POWER: bool = true;
 
 /// Coefficients of one link, by receiving side and emitting side.
 #[derive(Clone, Copy, Debug, Default)]
@@ -152,10 +149,8 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
 /// True when link `recv <- emit` is evaluated polygon by polygon ([`gather_link`]): from a
 /// large cluster close by, or to a cluster.
 fn gathered_link(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
-    NEAR_GATHER
-        && emit.kind() != super::ids::Kind::Source
-        && (near_field(st, ws, recv, emit)
-            || (CLUSTER_POWER && recv.kind() == super::ids::Kind::Cluster))
+    emit.kind() != super::ids::Kind::Source
+        && (recv.kind() == super::ids::Kind::Cluster || near_field(st, ws, recv, emit))
 }
 
 /// One estimate of a link's coefficients from `seed`, with `rays` rays per point; without
@@ -234,61 +229,8 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
                 }
             }
         }
-        Shape::Cluster { .. } => {
-            let inv = 1.0 / rays as f32;
-            let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
-            // A sample on a one-sided face turned away from the emitter is hidden from it by
-            // its own object, which the polygons' shares already leave dark: its visibility
-            // is taken as that of the samples on faces that can take the light (counting it
-            // as shadow too halved what a stem's far side got from the soil). Its flux density
-            // still counts, zero where the emitter does not face it.
-            let at = match e {
-                Shape::Source { .. } => None,
-                _ => Some(super::oriented::centre(st, ws, emit)),
-            };
-            let (mut seen, mut facing) = (0.0f32, 0.0f32);
-            let mut deferred = [(0.0f32, Vec3::ZERO); 2];
-            let (aim, reach) = reach_of(st, ws, emit);
-            for k in 0..rays {
-                let (x, px, w) = point_toward(st, ws, recv, aim, reach, hash3(seed, k, 0xC1));
-                let (f, open, s_side, v, d) =
-                    flux_at(st, ws, x, px, &e, emit, towards, hash3(seed, k, 0xE1), vis);
-                // Area-mean estimates: each sample weighted by its area over sampling density.
-                let (f, open) = (f * w, open * w);
-                out.rays += (f > 0.0 || open > 0.0) as u32;
-                out.open += inv * open;
-                let turned_away = at.is_some_and(|c| {
-                    px < st.polygons && {
-                        let rec = st.polygon(ws, px);
-                        State::sides(Elem(rec.root)) == 1 && Vec3::from(rec.normal).dot(c - x) < 0.0
-                    }
-                });
-                if turned_away {
-                    deferred[s_side].0 += inv * f;
-                    deferred[s_side].1 += d * f;
-                    continue;
-                }
-                seen += f * v;
-                facing += f;
-                out.k[0][s_side] += inv * f * v;
-                out.partial |= v < 1.0 && open > 0.0;
-                sum += d * (f * v);
-                weight += f * v;
-            }
-            if deferred.iter().any(|d| d.0 > 0.0) {
-                let v = if facing > 0.0 { seen / facing } else { 1.0 };
-                out.partial |= v < 1.0;
-                for (side, (f, d)) in deferred.into_iter().enumerate() {
-                    out.k[0][side] += f * v;
-                    sum += d * v;
-                    weight += f * v / inv;
-                }
-            }
-            // With every sample hidden, the open light's direction still orients the polygons.
-            if weight > 0.0 {
-                out.dir = sum / weight;
-            }
-        }
+        // Receiving clusters are gathered (see `gathered_link`).
+        Shape::Cluster { .. } => {}
         Shape::Source { .. } => {}
     }
     out
@@ -702,89 +644,6 @@ fn to_point<V: Visibility + ?Sized>(
             out.rays += 1;
             out.partial |= v < 1.0;
             (c * v, c, 0)
-        }
-    }
-}
-
-/// Flux density (per unit radiosity of the emitter) on a plane facing the emitter at `x`
-/// inside a receiving cluster: returns (coefficient, open coefficient, emitting side,
-/// visibility).
-#[allow(clippy::too_many_arguments)]
-fn flux_at<V: Visibility + ?Sized>(
-    st: &State,
-    ws: &[u8],
-    x: Vec3,
-    px: u32,
-    e: &Shape,
-    emit: Elem,
-    towards: Vec3,
-    seed: u32,
-    vis: &V,
-) -> (f32, f32, usize, f32, Vec3) {
-    match *e {
-        Shape::Patch {
-            corners,
-            n,
-            normal,
-            poly: ep,
-            area,
-            ..
-        } => {
-            let Some(s_side) = facing_side(x, corners[0], normal) else {
-                return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
-            };
-            if !emits(e, s_side) {
-                return (0.0, 0.0, s_side, 1.0, Vec3::ZERO);
-            }
-            // Exact at the point: the polygon's solid angle gives its scalar irradiance per
-            // unit radiosity (omega / pi), its vector form factor the light's direction. (A
-            // kernel of the polygon shrunk to a point underrates a wide emitter close by:
-            // a soil quad under a stem gave it a fifth of its light.)
-            let (omega, phi) = point_polygon_light(x, &corners[..n]);
-            let f = omega / PI;
-            if f.is_nan() || f <= 0.0 {
-                return (0.0, 0.0, s_side, 1.0, Vec3::ZERO);
-            }
-            let (u, v) = unit2(seed);
-            let y = point_on(&corners[..n], u, v);
-            let vis = vis.transmittance(x, y, [px, ep]);
-            let _ = area;
-            (f, f, s_side, vis, phi / f)
-        }
-        Shape::Cluster { .. } if small_cluster(st, ws, emit) => {
-            // Exact: solid angles and vector form factors of the polygons facing the point.
-            let (omega, phi, facing) = cluster_light(st, ws, emit, x);
-            let f = omega / PI;
-            if f.is_nan() || f <= 0.0 {
-                return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
-            }
-            let v = facing.visible(st, ws, emit, x, None, px, seed, 1, vis);
-            (f, f, 0, v, phi / f)
-        }
-        Shape::Cluster { area, min, max } if outside(x, min, max) => {
-            // As to a patch (see `to_point`), with the box's solid angle and vector form
-            // factor.
-            let projected = kernel_projection(x, min, max, towards);
-            let (omega, phi) = box_light(x, min, max);
-            if projected <= 0.0 || omega <= 0.0 {
-                return (0.0, 0.0, 0, 1.0, Vec3::ZERO);
-            }
-            let f = area * omega / (4.0 * PI * projected);
-            let (y, py) = point_facing(st, ws, emit, x, None, seed);
-            let v = vis.transmittance(x, y, [px, py]);
-            (f, f, 0, v, phi * (PI / omega))
-        }
-        Shape::Cluster { area, .. } => {
-            let (y, py) = point_facing(st, ws, emit, x, None, seed);
-            let d = y - x;
-            let d2 = d.length_squared();
-            let f = area / (4.0 * PI * d2 + area);
-            let v = vis.transmittance(x, y, [px, py]);
-            (f, f, 0, v, d.normalize_or_zero())
-        }
-        Shape::Source { towards } => {
-            let v = vis.transmittance(x, st.beyond(x, towards), [px, NONE]);
-            (1.0, 1.0, 0, v, towards)
         }
     }
 }

@@ -100,6 +100,53 @@ pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
     g * g
 }
 
+/// The share of a receiving side's light that the gather recomputes: what the hierarchy's
+/// links bring it over all it gets, links and the direct light of suns and sky, the largest
+/// over bands, for leaf patches `e` of polygon... summed over `leaves` (area-weighted).
+/// 0 when the links bring nothing: then no surface the side can see reflects or emits.
+fn gathered_share(st: &State, ws: &[u8], leaves: impl Iterator<Item = Elem>, side: usize) -> f32 {
+    let nb = st.bands;
+    let (mut links, mut all) = ([0.0f64; 8], [0.0f64; 8]);
+    for e in leaves {
+        let p = st.patch(ws, e);
+        let a = (p.area * p.exposed) as f64;
+        let mut h = [0.0f32; 8];
+        super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
+        let d = st.direct(ws, e, side);
+        for k in 0..nb {
+            let dk = d.map_or(0.0, |d| d[k]);
+            links[k] += a * (h[k] - dk).max(0.0) as f64;
+            all[k] += a * h[k].max(dk) as f64;
+        }
+    }
+    let mut share = 0.0f64;
+    for k in 0..nb {
+        if all[k] > 0.0 {
+            share = share.max(links[k] / all[k]);
+        }
+    }
+    share.clamp(0.0, 1.0) as f32
+}
+
+/// Rays for a receiving side of which the gather recomputes the share `share` of the light
+/// (see [`gathered_share`]), out of `full` for a side it recomputes wholly: the gather's
+/// noise on the side's total light is its noise on that share, times the share, so `full x
+/// share^2` rays give every side the same relative noise on its total (a sunlit leaf whose
+/// light is nine tenths sun needs a hundredth of the rays of a shaded one for the same
+/// accuracy). At least [`MIN_RAYS`] while anything is to be gathered, none when the links
+/// bring nothing (a scene whose surfaces neither reflect nor emit). The count depends only
+/// on the hierarchy's solution, never on the gather's own samples, so it biases nothing.
+fn adaptive_rays(full: u32, share: f32) -> u32 {
+    if full == 0 || share.is_nan() || share <= 0.0 {
+        return 0;
+    }
+    let n = libm::ceilf(full as f32 * share) as u32;
+    n.clamp(MIN_RAYS.min(full), full)
+}
+
+/// The fewest rays a receiving side that gathers anything casts.
+const MIN_RAYS: u32 = 4;
+
 /// Gathers polygon `poly`'s irradiance (W/m^2, per side and band, the mean over its whole
 /// area) into `out[side * bands + band]`, without the direct light of suns and sky. Returns
 /// the rays cast.
@@ -126,13 +173,23 @@ pub(crate) fn polygon<V: Visibility + ?Sized>(
     let mut sums = [[0.0f64; 8]; 2];
     let mut area = 0.0f64;
     let mut leaf_no = 0u32;
+    let mut side_rays = [0u32; 2];
+    for (side, r) in side_rays.iter_mut().enumerate().take(State::sides(root)) {
+        *r = adaptive_rays(
+            rays,
+            gathered_share(st, ws, st.leaves(ws, root).map(|l| l.0), side),
+        );
+    }
     for (e, p) in st.leaves(ws, root) {
         let (corners, k) = patch_corners(st, ws, e);
         let a = p.area as f64;
         area += a;
-        let g = leaf_grid(rays, p.area, total_area as f32);
         leaf_no += 1;
         for (side, sum) in sums.iter_mut().enumerate().take(State::sides(root)) {
+            if side_rays[side] == 0 {
+                continue;
+            }
+            let g = leaf_grid(side_rays[side], p.area, total_area as f32);
             let nrm = if side == 0 { normal } else { -normal };
             let seed = hash3(poly, leaf_no, 0xF1A1 + side as u32);
             let mut c = [0.0f64; 8];
@@ -538,11 +595,28 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
                     }
                     let rec = c.st.polygon(c.ws, p.poly);
                     let total = c.st.patch(c.ws, Elem(rec.root)).area;
-                    let g = leaf_grid(c.rays, p.area, total);
                     let (corners, k) = patch_corners(c.st, c.ws, e);
                     let normal = Vec3::from(rec.normal);
                     let mut cast = 0u32;
                     for side in 0..State::sides(e) {
+                        let share = gathered_share(c.st, c.ws, core::iter::once(e), side);
+                        let side_rays = adaptive_rays(c.rays, share);
+                        if side_rays == 0 {
+                            // Nothing to gather: keep what the links bring (nothing).
+                            let mut h = [0.0f32; 8];
+                            super::closure::leaf_irradiance(c.st, c.ws, e, side, &mut h[..nb]);
+                            if let Some(d) = c.st.direct(c.ws, e, side) {
+                                for (hv, dv) in h.iter_mut().zip(d) {
+                                    *hv -= dv;
+                                }
+                            }
+                            for (dst, v) in o[1 + side * nb..1 + (side + 1) * nb].iter_mut().zip(&h)
+                            {
+                                *dst = *v;
+                            }
+                            continue;
+                        }
+                        let g = leaf_grid(side_rays, p.area, total);
                         let nrm = if side == 0 { normal } else { -normal };
                         let seed = hash3(e.0, side as u32, 0x4E11);
                         let mut h = [0.0f64; 8];

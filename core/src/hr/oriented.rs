@@ -29,8 +29,6 @@ use super::state::State;
 use crate::limits::NONE;
 use glam::Vec3;
 
-const EXPERIMENT_EXACT_FACING: bool = false;
-
 /// Centre of an element (m): a patch's corner mean, a cluster's box centre.
 pub(crate) fn centre(st: &State, ws: &[u8], e: Elem) -> Vec3 {
     match e.kind() {
@@ -111,7 +109,7 @@ pub(crate) fn mean_facing(
 ) {
     out.fill(0.0);
     let c = st.cluster(ws, cluster);
-    if c.bins != NONE && !EXPERIMENT_EXACT_FACING {
+    if c.bins != NONE {
         super::bins::mean_facing(st, ws, c.bins, w, unit, out);
         return;
     }
