@@ -342,29 +342,44 @@ fn power_balances_on_random_scenes_at_every_scale() {
     // Emitted plus direct light equals absorbed plus absorbed by backs plus escaped, per
     // band: scenes from 1 mm to 1 km across, lamps down to a millionth of the floor's size,
     // open and closed, one- and two-sided. Escape and back absorption are measured by rays
-    // apart from the links, so the balance checks the transport.
-    let mut worst = 0.0f64;
+    // apart from the links, so the balance checks the transport: the hierarchy alone within
+    // 2%, and after the final gather within 3% (the gather is unbiased but its few hundred
+    // rays per side are noisy where a small patch of a reflector is lit thousands of times
+    // brighter than the rest: seed 10, a leaf 19 m from a 2.5 cm lamp, moves by +-2.4%
+    // between 600 and 10,000 rays per side).
+    let mut worst = [0.0f64; 2];
     for seed in 0..12 {
         let text = random_scene(seed);
         let scene = parse(&text);
-        let (_, stats) = solve(&scene, &Settings::default()).unwrap();
-        for band in 0..2 {
-            let b = &stats.balance;
-            let imbalance = b.relative_imbalance(band);
-            assert!(
-                imbalance.abs() < 0.02,
-                "seed {seed} band {band}: imbalance {:+.3}% (emitted {} direct {} absorbed {} backs {} escaped {})\n{text}",
-                100.0 * imbalance,
-                b.emitted[band],
-                b.direct[band],
-                b.absorbed[band],
-                b.absorbed_backs[band],
-                b.escaped[band]
-            );
-            worst = worst.max(imbalance.abs());
+        for (gathered, limit) in [(false, 0.02), (true, 0.03)] {
+            let mut settings = Settings::default();
+            if !gathered {
+                settings.final_rays = 0;
+            }
+            let (_, stats) = solve(&scene, &settings).unwrap();
+            for band in 0..2 {
+                let b = &stats.balance;
+                let imbalance = b.relative_imbalance(band);
+                assert!(
+                    imbalance.abs() < limit,
+                    "seed {seed} band {band}, gathered {gathered}: imbalance {:+.3}% (emitted {} direct {} absorbed {} backs {} escaped {})\n{text}",
+                    100.0 * imbalance,
+                    b.emitted[band],
+                    b.direct[band],
+                    b.absorbed[band],
+                    b.absorbed_backs[band],
+                    b.escaped[band]
+                );
+                let w = &mut worst[gathered as usize];
+                *w = w.max(imbalance.abs());
+            }
         }
     }
-    eprintln!("worst imbalance {:.3}%", 100.0 * worst);
+    eprintln!(
+        "worst imbalance: hierarchy {:.3}%, gathered {:.3}%",
+        100.0 * worst[0],
+        100.0 * worst[1]
+    );
 }
 
 #[test]

@@ -314,7 +314,9 @@ fn gather_link<V: Visibility + ?Sized>(
             // points drawn over them (towards the emitter, weighted back to area means).
             let (at, reach) = reach_of(st, ws, emit);
             let (mut power, mut dir, mut open) = (0.0f32, Vec3::ZERO, 0.0f32);
-            for k in 0..rays {
+            // At least 4 points: one point of a large receiver is a coin toss.
+            let points = rays.max(4);
+            for k in 0..points {
                 let (x, px, w) = point_toward(st, ws, recv, at, reach, hash3(seed, k, 0xC1));
                 if px >= st.polygons {
                     continue;
@@ -338,7 +340,7 @@ fn gather_link<V: Visibility + ?Sized>(
                 open += w * o;
                 dir += d * (w * irr);
             }
-            let inv = r_area / rays as f32;
+            let inv = r_area / points as f32;
             let (power, open) = (power * inv, open * inv);
             let mean = if power > 0.0 {
                 dir * (inv / power)
