@@ -4,17 +4,25 @@
 //! polygons' emitting sides (outward normal `n_p`, power `P_p`, W per band; see
 //! `oriented::emission`). Summed polygon by polygon for every link and every iteration, that
 //! was most of a solve in a tree of 100,000 leaves (34 million terms per iteration on the
-//! paper poplar). Binned by normal instead, each of [`BINS`] bins keeps `V = sum P n` and
-//! `S = sum P` per band, and:
-//! * a bin whose every normal faces `w` gives `V . w`, exactly;
+//! paper poplar). Binned by normal instead, each of [`BINS`] bins keeps, per band, its
+//! power `S = sum P` (and `V = sum P n`), and a second record keeps the same of the
+//! polygons' exposed areas (which do not change). Towards `w`, each bin's area record gives
+//! the mean of `max(0, n . w)` over its area:
+//! * a bin whose every normal faces `w` gives `V . w / S`, exactly;
 //! * a bin whose every normal faces away gives nothing, exactly;
 //! * a bin the terminator crosses is taken as a uniform cone of normals of collimation
 //!   `|V| / S` about `V`: the mean of `max(0, n . w)` over such a cone is the irradiance of
 //!   a plane facing `w` under a uniform spherical cap of light ([`cap_mean`], exact; the
-//!   same integral with normals and light exchanged).
+//!   same integral with normals and light exchanged);
 //!
-//! On crowns of leaves facing every way and on soil-like clusters (tests) the binned
-//! emission stays within 1.3% of the largest emission over all directions of the exact sum.
+//! and the bin's power times that mean is its emission. Taken from the areas, not from the
+//! power-weighted normals, the emission is linear in the powers, so the solution's
+//! iteration is a linear map (fitted to the powers, the mean facing radiosity of a white
+//! room's furniture kept moving with the radiosities' own pattern and never settled).
+//!
+//! On crowns of leaves facing every way (powers uneven within a bin) and on soil-like
+//! clusters (tests) the binned emission stays within 2% of the largest emission over all
+//! directions of the exact sum.
 //! Bins add up, so a cluster's bins are its children's plus its own polygons', one pass up
 //! the tree per iteration.
 
@@ -104,33 +112,6 @@ pub(crate) fn add(bins: &mut [f32], bands: usize, d: Vec3, power: &[f32]) {
             a[1] += p * d.y;
             a[2] += p * d.z;
             a[3] += p;
-        }
-    }
-}
-
-/// `sum_p P_p max(0, n_p . w)` per band from `bins`, added to `out` (W; the caller scales).
-pub(crate) fn emission(bins: &[f32], bands: usize, w: Vec3, out: &mut [f32]) {
-    for bin in 0..BINS {
-        let cw = bin_centre(bin).dot(w);
-        if cw <= -SPREAD {
-            continue;
-        }
-        for (k, o) in out.iter_mut().enumerate().take(bands) {
-            let a = &bins[(bin * bands + k) * 4..(bin * bands + k) * 4 + 4];
-            let s = a[3];
-            if s <= 0.0 {
-                continue;
-            }
-            let v = Vec3::new(a[0], a[1], a[2]);
-            let vw = v.dot(w);
-            let len = v.length();
-            *o += if cw >= SPREAD {
-                vw
-            } else if len > 0.0 {
-                s * cap_mean(len / s, vw / len)
-            } else {
-                0.25 * s
-            };
         }
     }
 }
@@ -232,15 +213,74 @@ fn fill(st: &State, ws: &mut [u8], unit: bool, record: u32) {
     }
 }
 
+/// Per bin, the mean of `max(0, n . w)` over the bin's exposed area (its normals taken as
+/// in [`emission`]), from a cluster's area bins `area`; 0 for an empty bin or one wholly
+/// turned away. Geometry only: it does not change while the solution iterates.
+fn facing_factors(area: &[f32], bands: usize, w: Vec3, g: &mut [f32; BINS]) {
+    for (bin, gb) in g.iter_mut().enumerate() {
+        *gb = 0.0;
+        let cw = bin_centre(bin).dot(w);
+        if cw <= -SPREAD {
+            continue;
+        }
+        let a = &area[bin * bands * 4..bin * bands * 4 + 4];
+        let s = a[3];
+        if s <= 0.0 {
+            continue;
+        }
+        let v = Vec3::new(a[0], a[1], a[2]);
+        let vw = v.dot(w);
+        let len = v.length();
+        let e = if cw >= SPREAD {
+            vw
+        } else if len > 0.0 {
+            s * cap_mean(len / s, vw / len)
+        } else {
+            0.25 * s
+        };
+        *gb = (e / s).max(0.0);
+    }
+}
+
+/// `sum_p P_p max(0, n_p . w)` per band (W; the caller scales) of a binned cluster whose
+/// bins start at record `bins` (see [`emission`]).
+pub(crate) fn emission_of(st: &State, ws: &[u8], bins: u32, w: Vec3, out: &mut [f32]) {
+    emission(of(st, ws, bins), of(st, ws, bins + 1), st.bands, w, out);
+}
+
+/// `sum_p P_p max(0, n_p . w)` per band (W) from a cluster's power bins `power` and area
+/// bins `area`: each bin's power times its [`facing_factors`], so that the result is linear
+/// in the polygons' powers and the solution's iteration a linear map (cones fitted to the
+/// power-weighted normals made it depend on the radiosities' own pattern, and a white room
+/// never settled).
+pub(crate) fn emission(power: &[f32], area: &[f32], bands: usize, w: Vec3, out: &mut [f32]) {
+    let mut g = [0.0f32; BINS];
+    facing_factors(area, bands, w, &mut g);
+    out.fill(0.0);
+    for (bin, &gb) in g.iter().enumerate() {
+        if gb <= 0.0 {
+            continue;
+        }
+        for (k, o) in out.iter_mut().enumerate().take(bands) {
+            *o += power[(bin * bands + k) * 4 + 3] * gb;
+        }
+    }
+}
+
 /// The mean radiosity (per band) of a binned cluster's emitting sides facing `w`, weighted
-/// by exposed area times cosine: its power bins over its area bins towards `w` (see
-/// `oriented::mean_facing`, which sums the polygons). Zero when nothing faces `w`; 1 for
-/// every band with `unit` where something does.
+/// by exposed area times cosine: its power bins over its area bins towards `w`, both
+/// weighted by the same [`facing_factors`] (see `oriented::mean_facing`, which sums the
+/// polygons). Linear in the powers and never above the brightest bin's mean radiosity.
+/// Zero when nothing faces `w`; 1 for every band with `unit` where something does.
 pub(crate) fn mean_facing(st: &State, ws: &[u8], bins: u32, w: Vec3, unit: bool, out: &mut [f32]) {
     let nb = st.bands;
-    let mut area = [0.0f32; crate::limits::MAX_BANDS];
-    emission(of(st, ws, bins + 1), nb, w, &mut area[..nb]);
-    let a = area[0];
+    let mut g = [0.0f32; BINS];
+    let area = of(st, ws, bins + 1);
+    facing_factors(area, nb, w, &mut g);
+    let mut a = 0.0f32;
+    for (bin, &gb) in g.iter().enumerate() {
+        a += area[bin * nb * 4 + 3] * gb;
+    }
     out.fill(0.0);
     if a.is_nan() || a <= 0.0 {
         return;
@@ -249,7 +289,15 @@ pub(crate) fn mean_facing(st: &State, ws: &[u8], bins: u32, w: Vec3, unit: bool,
         out.fill(1.0);
         return;
     }
-    emission(of(st, ws, bins), nb, w, out);
+    let power = of(st, ws, bins);
+    for (bin, &gb) in g.iter().enumerate() {
+        if gb <= 0.0 {
+            continue;
+        }
+        for (k, o) in out.iter_mut().enumerate().take(nb) {
+            *o += power[(bin * nb + k) * 4 + 3] * gb;
+        }
+    }
     for o in out.iter_mut() {
         *o /= a;
     }
@@ -312,14 +360,21 @@ mod tests {
         out
     }
 
+    /// The bins' answer, every side of area `area(i)`.
     fn binned(sides: &[(Vec3, [f32; 2])], w: Vec3) -> [f32; 2] {
-        let mut bins = [0.0f32; BINS * 2 * 4];
-        for (n, p) in sides {
-            add(&mut bins, 2, *n, p);
+        let (mut power, mut area) = ([0.0f32; BINS * 2 * 4], [0.0f32; BINS * 2 * 4]);
+        for (i, (n, p)) in sides.iter().enumerate() {
+            add(&mut power, 2, *n, p);
+            let a = side_area(i);
+            add(&mut area, 2, *n, &[a, a]);
         }
         let mut out = [0.0f32; 2];
-        emission(&bins, 2, w, &mut out);
+        emission(&power, &area, 2, w, &mut out);
         out
+    }
+
+    fn side_area(i: usize) -> f32 {
+        0.5 + unit2(hash3(i as u32, 5, 5)).0
     }
 
     #[test]
@@ -429,7 +484,49 @@ mod tests {
                 }
             }
             std::eprintln!("spread {spread}: worst {worst}");
-            assert!(worst < 0.015, "spread {spread}: worst {worst}");
+            assert!(worst < 0.025, "spread {spread}: worst {worst}");
+        }
+    }
+
+    #[test]
+    fn the_mean_facing_radiosity_is_linear_and_never_above_the_brightest_side() {
+        // Radiosity p / area per side; the binned mean towards any direction stays within
+        // the sides' range, and doubling every power doubles it.
+        for seed in 0..4u32 {
+            let sides: Vec<_> = (0..500u32)
+                .map(|i| {
+                    let n = unit(hash3(i, seed, 21));
+                    let (a, _) = unit2(hash3(i, seed, 22));
+                    (n, [a * side_area(i as usize), 2.0 * side_area(i as usize)])
+                })
+                .collect();
+            let (mut power, mut area, mut double) = (
+                [0.0f32; BINS * 2 * 4],
+                [0.0f32; BINS * 2 * 4],
+                [0.0f32; BINS * 2 * 4],
+            );
+            for (i, (n, p)) in sides.iter().enumerate() {
+                add(&mut power, 2, *n, p);
+                add(&mut double, 2, *n, &[2.0 * p[0], 2.0 * p[1]]);
+                let a = side_area(i);
+                add(&mut area, 2, *n, &[a, a]);
+            }
+            for i in 0..2000 {
+                let w = unit(hash3(i, seed, 23));
+                let (mut e, mut a, mut d) = ([0.0f32; 2], [0.0f32; 2], [0.0f32; 2]);
+                emission(&power, &area, 2, w, &mut e);
+                emission(&area, &area, 2, w, &mut a);
+                emission(&double, &area, 2, w, &mut d);
+                if a[0] <= 0.0 {
+                    continue;
+                }
+                let mean = e[0] / a[0];
+                assert!(mean <= 1.0 + 1e-4 && mean >= -1e-6, "{w:?}: {mean}");
+                assert!((e[1] / a[0] - 2.0).abs() < 1e-4, "{w:?}: {}", e[1] / a[0]);
+                for k in 0..2 {
+                    assert!((d[k] - 2.0 * e[k]).abs() <= 1e-5 * d[k].abs().max(1e-6));
+                }
+            }
         }
     }
 }

@@ -60,7 +60,7 @@ pub(crate) fn emission(st: &State, ws: &[u8], cluster: u32, w: Vec3, unit: bool,
         return;
     }
     if c.bins != NONE {
-        super::bins::emission(super::bins::of(st, ws, c.bins), st.bands, w, out);
+        super::bins::emission_of(st, ws, c.bins, w, out);
         let s = 4.0 / c.area;
         for o in out.iter_mut() {
             *o *= s;
