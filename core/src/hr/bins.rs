@@ -521,7 +521,7 @@ mod tests {
                     continue;
                 }
                 let mean = e[0] / a[0];
-                assert!(mean <= 1.0 + 1e-4 && mean >= -1e-6, "{w:?}: {mean}");
+                assert!((-1e-6..=1.0 + 1e-4).contains(&mean), "{w:?}: {mean}");
                 assert!((e[1] / a[0] - 2.0).abs() < 1e-4, "{w:?}: {}", e[1] / a[0]);
                 for k in 0..2 {
                     assert!((d[k] - 2.0 * e[k]).abs() <= 1e-5 * d[k].abs().max(1e-6));
