@@ -228,7 +228,18 @@ fn soil_under_a_random_canopy_gets_the_sunlight_its_own_shadows_let_through() {
     }
     text += "  }\n}\n";
     let scene = parse(&text);
-    let (hr, _) = solve(&scene, &Settings::default()).unwrap();
+    let (hr, stats) = solve(&scene, &Settings::default()).unwrap();
+    // Every surface is black: the final gather has nothing to recompute and casts no ray
+    // (it cost five times the hierarchy on such a canopy before issue 15).
+    let hierarchy = Settings {
+        final_rays: 0,
+        ..Settings::default()
+    };
+    let (_, alone) = solve(&scene, &hierarchy).unwrap();
+    assert_eq!(
+        stats.rays, alone.rays,
+        "the gather cast rays in a black scene"
+    );
     let polys = world_polygons(&scene);
     let vis = ObvhsVisibility::new(&polys).unwrap();
     let sun = glam::Vec3::from(towards);
