@@ -9,7 +9,7 @@ use hirad::generate::canopy;
 use hirad::generate::{mesh, room};
 use hirad::output::Progress;
 use hirad::scene::{Cluster, Scene, compile, read_image};
-use hirad::solve::{VisibilityChoice, solve_hr};
+use hirad::solve::{HrRun, VisibilityChoice, solve_hr};
 use hirad_core::geometry::{Aabb, Similarity, polygon_shape};
 use hirad_core::hr::Settings;
 use hirad_core::sink::{PolygonResult, Sink};
@@ -87,10 +87,15 @@ fn solve(scene: &Scene, epsilon: f32) -> Radiosity {
         epsilon,
         ..Settings::default()
     };
+    solve_with(scene, &settings).0
+}
+
+/// hr on 2 threads with obvhs: every polygon's front radiosity, and the run.
+fn solve_with(scene: &Scene, settings: &Settings) -> (Radiosity, HrRun) {
     let mut out = Radiosity::default();
-    solve_hr(
+    let run = solve_hr(
         scene,
-        &settings,
+        settings,
         2,
         None,
         VisibilityChoice::Obvhs,
@@ -98,7 +103,7 @@ fn solve(scene: &Scene, epsilon: f32) -> Radiosity {
         &mut out,
     )
     .unwrap();
-    out
+    (out, run)
 }
 
 #[test]
@@ -240,17 +245,7 @@ fn room_at_the_default_epsilon_converges_and_keeps_its_light() {
     // of the red band lost through cluster links (20% before the fix of receiving clusters'
     // samples); the bound guards the class, not the goal (0.5%).
     let s = room_scene(&[]);
-    let mut out = Radiosity::default();
-    let run = solve_hr(
-        &s,
-        &Settings::default(),
-        2,
-        None,
-        VisibilityChoice::Obvhs,
-        &Progress::new(true),
-        &mut out,
-    )
-    .unwrap();
+    let (out, run) = solve_with(&s, &Settings::default());
     assert!(
         run.stats.converged && !run.stats.diverged,
         "{:?}",
@@ -287,17 +282,7 @@ fn a_white_room_settles() {
             max_iterations: 200,
             ..Settings::default()
         };
-        let mut out = Radiosity::default();
-        let run = solve_hr(
-            &s,
-            &settings,
-            2,
-            None,
-            VisibilityChoice::Obvhs,
-            &Progress::new(true),
-            &mut out,
-        )
-        .unwrap();
+        let (_, run) = solve_with(&s, &settings);
         assert!(
             run.stats.converged && !run.stats.diverged && run.stats.iterations < 120,
             "rho {rho}: converged {} after {} iterations (still to come {})",

@@ -256,13 +256,18 @@ pub(crate) fn emission_of(st: &State, ws: &[u8], bins: u32, w: Vec3, out: &mut [
 pub(crate) fn emission(power: &[f32], area: &[f32], bands: usize, w: Vec3, out: &mut [f32]) {
     let mut g = [0.0f32; BINS];
     facing_factors(area, bands, w, &mut g);
+    weighted(power, bands, &g, out);
+}
+
+/// `sum_bin S_bin g_bin` per band of the bins `bins` (`out` overwritten).
+fn weighted(bins: &[f32], bands: usize, g: &[f32; BINS], out: &mut [f32]) {
     out.fill(0.0);
     for (bin, &gb) in g.iter().enumerate() {
         if gb <= 0.0 {
             continue;
         }
         for (k, o) in out.iter_mut().enumerate().take(bands) {
-            *o += power[(bin * bands + k) * 4 + 3] * gb;
+            *o += bins[(bin * bands + k) * 4 + 3] * gb;
         }
     }
 }
@@ -277,10 +282,9 @@ pub(crate) fn mean_facing(st: &State, ws: &[u8], bins: u32, w: Vec3, unit: bool,
     let mut g = [0.0f32; BINS];
     let area = of(st, ws, bins + 1);
     facing_factors(area, nb, w, &mut g);
-    let mut a = 0.0f32;
-    for (bin, &gb) in g.iter().enumerate() {
-        a += area[bin * nb * 4 + 3] * gb;
-    }
+    let mut a = [0.0f32; crate::limits::MAX_BANDS];
+    weighted(area, nb, &g, &mut a[..nb]);
+    let a = a[0];
     out.fill(0.0);
     if a.is_nan() || a <= 0.0 {
         return;
@@ -289,15 +293,7 @@ pub(crate) fn mean_facing(st: &State, ws: &[u8], bins: u32, w: Vec3, unit: bool,
         out.fill(1.0);
         return;
     }
-    let power = of(st, ws, bins);
-    for (bin, &gb) in g.iter().enumerate() {
-        if gb <= 0.0 {
-            continue;
-        }
-        for (k, o) in out.iter_mut().enumerate().take(nb) {
-            *o += power[(bin * nb + k) * 4 + 3] * gb;
-        }
-    }
+    weighted(of(st, ws, bins), nb, &g, out);
     for o in out.iter_mut() {
         *o /= a;
     }

@@ -115,29 +115,21 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
     // gathered polygon by polygon, as many samples as the light goes by, without occlusion
     // (no rays: a few samples of a large receiver under a few lamps land where they do not
     // shine more often than not, and the whole lamps' light was then judged by nothing).
-    let d = if gathered_link(st, ws, recv, emit) {
-        evaluate_seeded(
-            st,
-            ws,
-            recv,
-            emit,
-            vis,
-            hash3(seed, 0xDEC1DE, 0x5EE),
-            rays,
-            false,
-        )
+    let (d_rays, d_occlude) = if gathered_link(st, ws, recv, emit) {
+        (rays, false)
     } else {
-        evaluate_seeded(
-            st,
-            ws,
-            recv,
-            emit,
-            vis,
-            hash3(seed, 0xDEC1DE, 0x5EE),
-            rays.div_ceil(4),
-            true,
-        )
+        (rays.div_ceil(4), true)
     };
+    let d = evaluate_seeded(
+        st,
+        ws,
+        recv,
+        emit,
+        vis,
+        hash3(seed, 0xDEC1DE, 0x5EE),
+        d_rays,
+        d_occlude,
+    );
     out.open = d.open;
     out.partial = d.partial;
     out.spread = d.spread;

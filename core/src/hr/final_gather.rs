@@ -133,7 +133,7 @@ fn gathered_share(st: &State, ws: &[u8], leaves: impl Iterator<Item = Elem>, sid
 /// sqrt(share)`. The gather's noise on the side's total is its noise on that share times
 /// the share, so `full x share^2` would keep every side's relative noise equal; the square
 /// root spends more, because the share itself comes from the hierarchy's estimate (a law
-/// linear in the share left a two-sided leaf inside a cluster 5% off, the square root 1.3%).
+/// linear in the share left a two-sided leaf inside a cluster 5% off, the square root 1.5%).
 /// A sunlit leaf whose light is nine tenths sun still casts a third of the rays of a shaded
 /// one. At least [`MIN_RAYS`] while anything is to be gathered, none when the links bring
 /// nothing (a scene whose surfaces neither reflect nor emit). The count depends only on the
