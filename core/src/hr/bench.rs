@@ -268,3 +268,51 @@ pub fn each_link(
         );
     }
 }
+
+/// Slots a link audit needs (`links x bands` for each of [`audit`]'s buffers).
+pub fn link_slots(snap: &Snapshot) -> (usize, usize) {
+    (snap.0.links.len as usize, snap.0.bands)
+}
+
+/// Per link (`[link * bands + band]`, W): the power it carries in the current solution and
+/// the power that `rays` rays traced forward from the emitters take through it (see
+/// `audit`); what no link carries comes back by where it went.
+pub fn audit<V: Visibility + ?Sized>(
+    snap: &Snapshot,
+    workspace: &mut [u8],
+    vis: &V,
+    rays: u32,
+    carried: &mut [f64],
+    traced: &mut [f64],
+) -> audit::Leftover {
+    let ws = aligned(workspace);
+    let (ws, _, _) = parts(&snap.0.lay, ws, 0).expect("the workspace of the snapshot");
+    audit::carried(&snap.0, ws, carried);
+    audit::traced(&snap.0, ws, vis, rays, traced)
+}
+
+/// What links into clusters hand their polygons in all (W per band; see `audit`).
+pub fn distributed(snap: &Snapshot, workspace: &mut [u8]) -> [f64; 8] {
+    let ws = aligned(workspace);
+    let (ws, _, _) = parts(&snap.0.lay, ws, 0).expect("the workspace of the snapshot");
+    audit::distributed(&snap.0, ws)
+}
+
+/// [`ElemInfo`] and flags of link `i`, or `None` for a free slot.
+pub fn link_info(
+    snap: &Snapshot,
+    workspace: &mut [u8],
+    i: u32,
+) -> Option<(ElemInfo, ElemInfo, u32)> {
+    let ws = aligned(workspace);
+    let (ws, _, _) = parts(&snap.0.lay, ws, 0).expect("the workspace of the snapshot");
+    let l = snap.0.link(ws, i);
+    if l.flags & records::FREE != 0 {
+        return None;
+    }
+    Some((
+        info(&snap.0, ws, ids::Elem(l.recv)),
+        info(&snap.0, ws, ids::Elem(l.emit)),
+        l.flags,
+    ))
+}

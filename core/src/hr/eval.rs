@@ -11,8 +11,8 @@
 //! two elements, so a link's value never depends on when or on which thread it is computed.
 
 use super::cluster_kernel::{
-    Plane, box_form_factor, box_projected_area, cluster_form_factor, gathered, near_field, outside,
-    shared_area, small_cluster,
+    Plane, SMALL_CLUSTER, box_form_factor, box_projected_area, cluster_form_factor,
+    cluster_polygon, gathered, near_field, outside, shared_area, small_cluster,
 };
 use super::ids::Elem;
 use super::sample::{point_facing, point_toward};
@@ -305,11 +305,39 @@ fn gather_link<V: Visibility + ?Sized>(
             // The power the receiver's surfaces take, from the irradiance on the planes of
             // points drawn over them (towards the emitter, weighted back to area means).
             let (at, reach) = reach_of(st, ws, emit);
-            let (mut power, mut dir, mut open) = (0.0f32, Vec3::ZERO, 0.0f32);
+            // A patch emitter's two sides may send different radiosities: each point's
+            // light counts for the side of the emitter that faces it.
+            let plane = match st.shape(ws, emit) {
+                Shape::Patch {
+                    corners, normal, ..
+                } => Some((corners[0], normal)),
+                _ => None,
+            };
+            let (mut power, mut dir, mut open) = ([0.0f32; 2], Vec3::ZERO, 0.0f32);
             // At least 4 points: one point of a large receiver is a coin toss.
-            let points = rays.max(4);
+            let rc = st.cluster(ws, recv.index());
+            // A small receiver gets one point on each of its polygons (stratified: drawn
+            // towards the emitter, four points of a handful of leaves left whole clusters
+            // 10% off), with rays shared among them; a larger one at least 4 points.
+            let small = rc.polygons <= SMALL_CLUSTER;
+            let (points, rays) = if small {
+                (rc.polygons, (4 * rays).div_ceil(rc.polygons.max(1)).max(1))
+            } else {
+                (rays.max(4), rays)
+            };
             for k in 0..points {
-                let (x, px, w) = point_toward(st, ws, recv, at, reach, hash3(seed, k, 0xC1));
+                let (x, px, w) = if small {
+                    let (poly, corners, n) = cluster_polygon(st, ws, rc.first_polygon + k);
+                    let (u, v) = unit2(hash3(seed, k, 0xC3));
+                    let a = st.patch(ws, Elem(st.polygon(ws, poly).root)).area;
+                    (
+                        point_on(&corners[..n], u, v),
+                        poly,
+                        a * points as f32 / r_area,
+                    )
+                } else {
+                    point_toward(st, ws, recv, at, reach, hash3(seed, k, 0xC1))
+                };
                 if px >= st.polygons {
                     continue;
                 }
@@ -328,21 +356,27 @@ fn gather_link<V: Visibility + ?Sized>(
                     vis,
                 );
                 out.rays += rays;
-                power += w * irr;
+                let side = match plane {
+                    Some((on, n)) => facing_side(x, on, n).unwrap_or(0),
+                    None => 0,
+                };
+                power[side] += w * irr;
                 open += w * o;
                 dir += d * (w * irr);
             }
             let inv = r_area / points as f32;
-            let (power, open) = (power * inv, open * inv);
-            let mean = if power > 0.0 {
-                dir * (inv / power)
+            let (power, open) = ([power[0] * inv, power[1] * inv], open * inv);
+            let total = power[0] + power[1];
+            let mean = if total > 0.0 {
+                dir * (inv / total)
             } else {
                 Vec3::ZERO
             };
             // The flux density that the polygons' shares of this cone turn into that power.
             let taken = shared_area(st, ws, recv.index(), mean);
             if taken > 0.0 {
-                out.k[0][0] = power / taken;
+                out.k[0][0] = power[0] / taken;
+                out.k[0][1] = power[1] / taken;
                 out.open = open / taken;
             }
             out.dir = mean;

@@ -567,3 +567,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
 /// that can be copied with its workspace and run again. Not a stable interface.
 #[doc(hidden)]
 pub mod bench;
+
+/// A diagnostic of the transport link by link, for `examples/audit.rs` (through `bench`).
+#[doc(hidden)]
+pub mod audit;
