@@ -28,8 +28,8 @@ use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
 use crate::visibility::Visibility;
 use glam::Vec3;
 
-/// Emitting polygons up to which their light is added directly; with more, the rays gather
-/// emission with the rest (many emitters are large or dim, and their light is smooth).
+/// Emitting polygons up to which each leaf weighs every one of them; with more, each sample
+/// draws one down the cluster tree (see `emitter_tree`).
 pub(crate) const MAX_DIRECT_EMITTERS: usize = 64;
 
 /// Rays for the whole scene when the count per side is chosen automatically, at epsilon
@@ -41,13 +41,22 @@ const AUTO_CAP: f64 = 65_536.0;
 const AUTO_MAX: u32 = 262_144;
 const AUTO_MIN: u32 = 64;
 
-/// The emitting polygons whose light is added directly, or none when there are more than
-/// [`MAX_DIRECT_EMITTERS`] (then `count` is 0 and `direct` false).
+/// The emitting polygons whose light is added directly, each weighed by every leaf, or none
+/// when there are more than [`MAX_DIRECT_EMITTERS`] (then `count` is 0, `direct` false and
+/// `tree` true: each sample draws one emitter down the cluster tree).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Emitters {
     pub ids: [u32; MAX_DIRECT_EMITTERS],
     pub count: usize,
     pub direct: bool,
+    pub tree: bool,
+}
+
+impl Emitters {
+    /// True when emission is added directly, not gathered by the rays.
+    fn apart(&self) -> bool {
+        self.direct || self.tree
+    }
 }
 
 /// Finds the scene's emitting polygons (see [`Emitters`]).
@@ -56,6 +65,7 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
         ids: [NONE; MAX_DIRECT_EMITTERS],
         count: 0,
         direct: true,
+        tree: false,
     };
     for i in 0..st.polygons {
         let m = st.material(ws, st.polygon(ws, i).material);
@@ -66,6 +76,7 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
                     ids: [NONE; MAX_DIRECT_EMITTERS],
                     count: 0,
                     direct: false,
+                    tree: true,
                 };
             }
             out.ids[out.count] = i;
@@ -261,6 +272,12 @@ fn leaf<V: Visibility + ?Sized>(
     } else {
         0.0
     };
+    let cut = if em.tree {
+        let centre = corners.iter().copied().sum::<Vec3>() / corners.len() as f32;
+        Some(super::emitter_tree::cut(st, ws, centre, nrm, poly)).filter(|c| !c.is_empty())
+    } else {
+        None
+    };
     for j in 0..n {
         let cell = ((j as u64 * stride as u64) % n as u64) as u32;
         let (ju, jv) = unit2(hash3(seed, j, 0xA3));
@@ -289,13 +306,18 @@ fn leaf<V: Visibility + ?Sized>(
                 let m = st.material(ws, hp.material);
                 if let Some(b) = st.b(ws, at, hside) {
                     for k in 0..nb {
-                        let e = if em.direct { m.emit[hside][k] } else { 0.0 };
+                        let e = if em.apart() { m.emit[hside][k] } else { 0.0 };
                         c[k] = (b[k] - e).max(0.0);
                     }
                 }
             }
         }
-        if total > 0.0 {
+        if let Some(cut) = &cut {
+            let h = hash3(seed, j, 0xE3);
+            let pick = (j as f64 + unit2(h).0 as f64) / n as f64;
+            let leaf = Receiver { poly, nrm, x };
+            cast += drawn_light(st, ws, vis, &leaf, cut, pick, h, &mut c[..nb]);
+        } else if total > 0.0 {
             let h = hash3(seed, j, 0xE3);
             let pick = (j as f32 + unit2(h).0) / n as f32;
             let leaf = Receiver { poly, nrm, x };
@@ -480,6 +502,55 @@ fn emitted_light<V: Visibility + ?Sized>(
         if t > 0.0 {
             let scale = t * f * total / share.weight;
             for (ck, e) in c.iter_mut().zip(&m.emit[share.side][..nb]) {
+                *ck += scale * e;
+            }
+        }
+        return 1;
+    }
+    0
+}
+
+/// Adds to `c` the irradiance at the leaf's sample from one emitting polygon drawn down the
+/// leaf's light cut (`pick` in [0, 1)): its exact unoccluded form factor from the point times
+/// one visibility ray, over the probability it was drawn with. Returns the rays cast.
+#[allow(clippy::too_many_arguments)]
+fn drawn_light<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    vis: &V,
+    leaf: &Receiver,
+    cut: &super::emitter_tree::Cut,
+    pick: f64,
+    h: u32,
+    c: &mut [f32],
+) -> u32 {
+    let (x, n) = (leaf.x, leaf.nrm);
+    let Some(d) = super::emitter_tree::draw(st, ws, cut, x, n, pick, leaf.poly) else {
+        return 0;
+    };
+    if d.prob.is_nan() || d.prob <= 0.0 {
+        return 0;
+    }
+    let lp = st.polygon(ws, d.poly);
+    let (lc, k) = patch_corners(st, ws, Elem(lp.root));
+    let Some(side) = facing_side(x, lc[0], Vec3::from(lp.normal)) else {
+        return 0;
+    };
+    let m = st.material(ws, lp.material);
+    let f = point_polygon(x, n, &lc[..k]);
+    if !(f.is_finite() && f > 0.0) {
+        return 0;
+    }
+    for attempt in 0..8u32 {
+        let (u, v) = unit2(hash3(h, attempt, 0x9F));
+        let y = point_on(&lc[..k], u, v);
+        if n.dot(y - x) <= 0.0 {
+            continue;
+        }
+        let t = vis.transmittance(x, y, [leaf.poly, d.poly]);
+        if t > 0.0 {
+            let scale = t * f / d.prob;
+            for (ck, e) in c.iter_mut().zip(&m.emit[side][..st.bands]) {
                 *ck += scale * e;
             }
         }

@@ -197,6 +197,7 @@ fn new_cluster(s: &mut State, ws: &mut [u8], parent: u32) -> Result<u32, HrError
         first_polygon: 0,
         bins: NONE,
         peak: 0.0,
+        emitted: 0.0,
     };
     s.set_cluster(ws, i, &c);
     let e = Elem::new(Kind::Cluster, i);
@@ -524,12 +525,12 @@ fn set_parent(s: &State, ws: &mut [u8], e: Elem, parent: u32) {
     }
 }
 
-/// Boxes, areas and polygon counts of clusters, children before parents.
+/// Boxes, areas, polygon counts and emitted powers of clusters, children before parents.
 fn finish_clusters(s: &mut State, ws: &mut [u8]) {
     for i in (0..s.clusters).rev() {
         let mut c = s.cluster(ws, i);
         let mut b = Aabb::EMPTY;
-        let (mut area, mut polys) = (0.0f32, 0u32);
+        let (mut area, mut polys, mut emitted) = (0.0f32, 0u32, 0.0f32);
         for k in 0..c.child_count {
             let e = s.child(ws, c.children + k);
             match e.kind() {
@@ -540,6 +541,7 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
                     }
                     area += cc.area;
                     polys += cc.polygons;
+                    emitted += cc.emitted;
                 }
                 _ => {
                     let p = s.patch(ws, e);
@@ -548,6 +550,7 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
                     }
                     area += p.area;
                     polys += 1;
+                    emitted += polygon_emission(s, ws, p.poly);
                 }
             }
         }
@@ -558,8 +561,21 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
         c.bbox_max = b.max.to_array();
         c.area = area;
         c.polygons = polys;
+        c.emitted = emitted;
         s.set_cluster(ws, i, &c);
     }
+}
+
+/// The power polygon `poly` emits (W, the sides it has, the largest band).
+pub(crate) fn polygon_emission(s: &State, ws: &[u8], poly: u32) -> f32 {
+    let rec = s.polygon(ws, poly);
+    let m = s.material(ws, rec.material);
+    let root = Elem(rec.root);
+    let area = s.patch(ws, root).area;
+    let sides = State::sides(root);
+    (0..s.bands)
+        .map(|b| area * (0..sides).map(|k| m.emit[k][b]).sum::<f32>())
+        .fold(0.0f32, f32::max)
 }
 
 /// Each cluster's polygons, consecutive in the cluster-order array: parents are numbered

@@ -23,6 +23,7 @@ mod closure;
 mod cluster_kernel;
 mod cone;
 mod direct;
+mod emitter_tree;
 mod error;
 mod eval;
 mod exec;

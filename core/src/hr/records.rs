@@ -89,6 +89,9 @@ pub(crate) struct Cluster {
     /// The largest radiosity of its polygons (W/m^2, any side and band), as of the last
     /// pull: what a link from it may bring where its light is uneven (see `refine`).
     pub peak: f32,
+    /// The power its polygons emit (W, both sides, the largest band): how the final gather
+    /// picks emitting polygons in scenes with many (see `final_gather::emitter_tree`).
+    pub emitted: f32,
 }
 
 /// A directional source: a sun or one sky direction.
