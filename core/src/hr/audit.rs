@@ -78,6 +78,17 @@ pub(crate) fn carried(st: &State, ws: &[u8], carried: &mut [f64]) {
         let area = (p.area * p.exposed) as f64;
         let k = st.link_k(ws, i);
         let at = super::oriented::centre(st, ws, recv);
+        if super::oriented::witnessed(&l) {
+            for r in 0..if kk == 1 { 1 } else { 2 } {
+                let coef = if kk == 1 { k[0] } else { k[r * 2] };
+                let per_side = State::sides(recv) == 2;
+                super::oriented::witness_radiosity(st, ws, &l, r, per_side, false, &mut b[..nb]);
+                for (o, v) in out.iter_mut().zip(&b[..nb]) {
+                    *o += (coef * v) as f64 * area;
+                }
+            }
+            continue;
+        }
         for s in 0..kk.min(2) {
             if !super::oriented::radiosity_towards(
                 st,

@@ -88,9 +88,10 @@ impl Facing {
 
     /// Fraction of the light of the facing polygons that reaches `x` unblocked: `rays`
     /// rays, each to a polygon drawn by weight and a point on it in front of the plane
-    /// through `x` with normal `nr` (when given).
+    /// through `x` with normal `nr` (when given); and two of the polygon sides they reached,
+    /// drawn by what they let through (see `Link::witness`).
     #[allow(clippy::too_many_arguments)]
-    pub fn visible<V: Visibility + ?Sized>(
+    pub fn visible_witnessed<V: Visibility + ?Sized>(
         &self,
         st: &State,
         ws: &[u8],
@@ -101,9 +102,10 @@ impl Facing {
         seed: u32,
         rays: u32,
         vis: &V,
-    ) -> f32 {
+    ) -> (f32, Witnesses) {
+        let mut wit = Witnesses::EMPTY;
         if self.count == 0 || self.total <= 0.0 {
-            return 1.0;
+            return (1.0, wit);
         }
         let first = st.cluster(ws, e.index()).first_polygon;
         let mut seen = 0.0f32;
@@ -128,9 +130,14 @@ impl Facing {
                     break;
                 }
             }
-            seen += vis.transmittance(x, y, [from, poly]);
+            let t = vis.transmittance(x, y, [from, poly]);
+            seen += t;
+            let normal = Vec3::from(st.polygon(ws, poly).normal);
+            if let Some(side) = facing_side(x, corners[0], normal) {
+                wit.offer([poly | ((side as u32) << 31); 2], t, hash3(h, j, 0x3E));
+            }
         }
-        seen / rays.max(1) as f32
+        (seen / rays.max(1) as f32, wit)
     }
 }
 
@@ -256,6 +263,53 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
     occlude: bool,
     vis: &V,
 ) -> (f32, Vec3, f32) {
+    let (k, d, o, _) = gathered_witnessed(st, ws, e, x, plane, skip, seed, rays, occlude, vis);
+    (k, d, o)
+}
+
+/// Two polygon sides drawn among the samples of a gathered link, each with probability its
+/// share of their summed contributions `total` (see `Link::witness`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Witnesses {
+    pub total: f32,
+    pub pick: [u32; 2],
+}
+
+impl Witnesses {
+    pub(crate) const EMPTY: Witnesses = Witnesses {
+        total: 0.0,
+        pick: [NONE; 2],
+    };
+
+    /// Offers `pick` (a side, or another set's picks) with weight `w` (`h`: the draws).
+    pub(crate) fn offer(&mut self, pick: [u32; 2], w: f32, h: u32) {
+        if w.is_nan() || w <= 0.0 {
+            return;
+        }
+        self.total += w;
+        for (r, mine) in self.pick.iter_mut().enumerate() {
+            if pick[r] != NONE && unit2(hash3(h, r as u32, 0x3B)).0 * self.total < w {
+                *mine = pick[r];
+            }
+        }
+    }
+}
+
+/// [`gathered`], and two of the polygon sides its samples met, drawn by their contributions.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn gathered_witnessed<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    x: Vec3,
+    plane: Plane,
+    skip: u32,
+    seed: u32,
+    rays: u32,
+    occlude: bool,
+    vis: &V,
+) -> (f32, Vec3, f32, Witnesses) {
+    let mut wit = Witnesses::EMPTY;
     let nr = match plane {
         Plane::Facing(n) => Some(n),
         Plane::Sides(n, 1) => Some(n),
@@ -353,10 +407,12 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
         open += weight * value;
         sum += weight * value * seen;
         dir += towards * (weight * value * seen);
+        let id = p.poly | ((side as u32) << 31);
+        wit.offer([id; 2], weight * value * seen, hash3(h, j, 0x3A));
     }
     let inv = 1.0 / n as f32;
     let mean = if sum > 0.0 { dir / sum } else { Vec3::ZERO };
-    (sum * inv, mean, open * inv)
+    (sum * inv, mean, open * inv, wit)
 }
 
 /// The area through which cluster `c`'s polygons take a cone of light of unit flux density

@@ -11,8 +11,8 @@
 //! two elements, so a link's value never depends on when or on which thread it is computed.
 
 use super::cluster_kernel::{
-    Plane, SMALL_CLUSTER, box_form_factor, box_projected_area, cluster_form_factor,
-    cluster_polygon, gathered, near_field, outside, shared_area, small_cluster,
+    Plane, SMALL_CLUSTER, Witnesses, box_form_factor, box_projected_area, cluster_form_factor,
+    cluster_polygon, gathered_witnessed, near_field, outside, shared_area, small_cluster,
 };
 use super::ids::Elem;
 use super::sample::{point_facing, point_toward};
@@ -47,6 +47,9 @@ pub(crate) struct Coefficients {
     /// The coefficients with occlusion summed over sides, from the refinement's samples
     /// (see [`evaluate`]).
     pub seen: f32,
+    /// From a cluster, gathered: the polygon sides whose radiosities the link carries (see
+    /// `Link::witness`).
+    pub witness: [u32; 2],
 }
 
 /// Receiving sides of an element: both for a two-sided patch, the front otherwise (the back
@@ -162,6 +165,7 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
     let e = st.shape(ws, emit);
     let mut out = Coefficients {
         exact: small_cluster(st, ws, emit),
+        witness: [NONE; 2],
         ..Coefficients::default()
     };
     // The direction in which the gather takes an emitting cluster's radiance (see
@@ -197,19 +201,25 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
             let mut wts = [0.0f32; MAX_QUADRATURE];
             exposed_quadrature(&rp, &corners[..n], &mut pts, &mut wts);
             let (mut lo, mut hi) = ([f32::INFINITY; 2], [0.0f32; 2]);
+            let mut wit = [Witnesses::EMPTY; 2];
             for q in 0..m {
                 let (x, w) = (pts[q], wts[q]);
                 out.partial |= w == 0.0;
                 for side in 0..recv_sides(&r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
-                    let (contrib, open, s_side) = to_point(
+                    let (contrib, open, s_side, wq) = to_point(
                         st, ws, x, nr, poly, &e, emit, towards, qs, rays, vis, &mut out,
                     );
                     out.open += plain[q] * open;
                     if w == 0.0 {
                         continue;
                     }
+                    wit[side].offer(
+                        wq.pick,
+                        w * contrib,
+                        hash3(seed, q as u32, 0x3F + side as u32),
+                    );
                     out.k[side][s_side] += w * contrib;
                     lo[side] = lo[side].min(contrib);
                     hi[side] = hi[side].max(contrib);
@@ -219,6 +229,9 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
                 if hi[side] > 0.0 {
                     out.spread = out.spread.max(hi[side] - lo[side].min(hi[side]));
                 }
+            }
+            if out.exact {
+                out.witness = witnesses(&r, &wit);
             }
         }
         // Receiving clusters are gathered (see `gathered_link`).
@@ -249,6 +262,8 @@ fn gather_link<V: Visibility + ?Sized>(
     out: &mut Coefficients,
 ) {
     out.exact = true;
+    // Per receiving side of a patch; a cluster's in the first.
+    let mut wit = [Witnesses::EMPTY; 2];
     // Judged by the light it would bring unoccluded: a few visibility rays into a volume of
     // leaves see little or nothing more often than not, and a large link kept on that
     // ground carries its whole noise.
@@ -273,7 +288,7 @@ fn gather_link<V: Visibility + ?Sized>(
                 for side in 0..recv_sides(r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
-                    let (k, _, open) = gathered(
+                    let (k, _, open, wq) = gathered_witnessed(
                         st,
                         ws,
                         emit,
@@ -291,6 +306,11 @@ fn gather_link<V: Visibility + ?Sized>(
                         continue;
                     }
                     out.k[side][0] += w * k;
+                    wit[side].offer(
+                        wq.pick,
+                        w * wq.total,
+                        hash3(seed, q as u32, 0x3C + side as u32),
+                    );
                     lo[side] = lo[side].min(k);
                     hi[side] = hi[side].max(k);
                 }
@@ -343,7 +363,7 @@ fn gather_link<V: Visibility + ?Sized>(
                 }
                 let rec = st.polygon(ws, px);
                 let sides = State::sides(Elem(rec.root));
-                let (irr, d, o) = gathered(
+                let (irr, d, o, wq) = gathered_witnessed(
                     st,
                     ws,
                     emit,
@@ -361,6 +381,7 @@ fn gather_link<V: Visibility + ?Sized>(
                     None => 0,
                 };
                 power[side] += w * irr;
+                wit[0].offer(wq.pick, w * wq.total, hash3(seed, k, 0x3D));
                 open += w * o;
                 dir += d * (w * irr);
             }
@@ -382,6 +403,19 @@ fn gather_link<V: Visibility + ?Sized>(
             out.dir = mean;
         }
         Shape::Source { .. } => {}
+    }
+    if emit.kind() == super::ids::Kind::Cluster {
+        out.witness = witnesses(r, &wit);
+    }
+}
+
+/// A link's witnesses from those drawn per receiving side: one per side for a two-sided
+/// patch, both of the first otherwise (see `Link::witness`).
+fn witnesses(r: &Shape, wit: &[Witnesses; 2]) -> [u32; 2] {
+    if recv_sides(r) == 2 {
+        [wit[0].pick[0], wit[1].pick[0]]
+    } else {
+        wit[0].pick
     }
 }
 
@@ -553,7 +587,8 @@ fn reciprocal<V: Visibility + ?Sized>(
 }
 
 /// Irradiance coefficient at point `x` (normal `nr`, on polygon `poly`) from the emitter:
-/// returns (visible coefficient, open coefficient, emitting side).
+/// returns (visible coefficient, open coefficient, emitting side, and from a small cluster
+/// the polygon sides its rays reached, see `Link::witness`).
 #[allow(clippy::too_many_arguments)]
 fn to_point<V: Visibility + ?Sized>(
     st: &State,
@@ -568,7 +603,8 @@ fn to_point<V: Visibility + ?Sized>(
     rays: u32,
     vis: &V,
     out: &mut Coefficients,
-) -> (f32, f32, usize) {
+) -> (f32, f32, usize, Witnesses) {
+    const NO: Witnesses = Witnesses::EMPTY;
     match *e {
         Shape::Patch {
             corners,
@@ -578,14 +614,14 @@ fn to_point<V: Visibility + ?Sized>(
             ..
         } => {
             let Some(s_side) = facing_side(x, corners[0], normal) else {
-                return (0.0, 0.0, 0);
+                return (0.0, 0.0, 0, NO);
             };
             if !emits(e, s_side) {
-                return (0.0, 0.0, s_side);
+                return (0.0, 0.0, s_side, NO);
             }
             let f = point_polygon(x, nr, &corners[..n]);
             if f <= 0.0 {
-                return (0.0, 0.0, s_side);
+                return (0.0, 0.0, s_side, NO);
             }
             // Rays to points of the emitter in front of the receiving side.
             let (mut seen, mut cast) = (0.0f32, 0u32);
@@ -604,7 +640,7 @@ fn to_point<V: Visibility + ?Sized>(
             out.rays += cast;
             let v = if cast == 0 { 1.0 } else { seen / cast as f32 };
             out.partial |= v < 1.0;
-            (f * v, f, s_side)
+            (f * v, f, s_side, NO)
         }
         Shape::Cluster { area, .. } if small_cluster(st, ws, emit) => {
             // Exact: the form factors of the cluster's polygons that face the point, times
@@ -612,13 +648,14 @@ fn to_point<V: Visibility + ?Sized>(
             let facing = cluster_form_factor(st, ws, emit, x, nr);
             let open = facing.total.min(1.0);
             if open <= 0.0 {
-                return (0.0, 0.0, 0);
+                return (0.0, 0.0, 0, NO);
             }
             let _ = area;
-            let v = facing.visible(st, ws, emit, x, Some(nr), poly, seed, rays, vis);
+            let (v, wit) =
+                facing.visible_witnessed(st, ws, emit, x, Some(nr), poly, seed, rays, vis);
             out.rays += rays;
             out.partial |= v < 1.0;
-            (open * v, open, 0)
+            (open * v, open, 0, wit)
         }
         Shape::Cluster { area, min, max } if outside(x, min, max) => {
             // The cluster as a volume of uniform radiance filling its box: its kernel is the
@@ -627,7 +664,7 @@ fn to_point<V: Visibility + ?Sized>(
             let projected = kernel_projection(x, min, max, towards);
             let ff = box_form_factor(x, nr, min, max);
             if projected <= 0.0 || ff <= 0.0 {
-                return (0.0, 0.0, 0);
+                return (0.0, 0.0, 0, NO);
             }
             let open = area * ff / (4.0 * projected);
             let mut seen = 0.0f32;
@@ -638,7 +675,7 @@ fn to_point<V: Visibility + ?Sized>(
             out.rays += rays;
             let v = seen / rays as f32;
             out.partial |= v < 1.0;
-            (open * v, open, 0)
+            (open * v, open, 0, NO)
         }
         Shape::Cluster { area, .. } => {
             let (mut sum, mut open) = (0.0f32, 0.0f32);
@@ -661,17 +698,17 @@ fn to_point<V: Visibility + ?Sized>(
                 sum += f * v;
                 open += f;
             }
-            (sum / rays as f32, open / rays as f32, 0)
+            (sum / rays as f32, open / rays as f32, 0, NO)
         }
         Shape::Source { towards } => {
             let c = nr.dot(towards);
             if c <= 0.0 {
-                return (0.0, 0.0, 0);
+                return (0.0, 0.0, 0, NO);
             }
             let v = vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
             out.rays += 1;
             out.partial |= v < 1.0;
-            (c * v, c, 0)
+            (c * v, c, 0, NO)
         }
     }
 }

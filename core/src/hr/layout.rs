@@ -73,9 +73,9 @@ impl Strides {
 
     /// Floats an evaluated link hands back: its coefficients, the open coefficient, the
     /// partial-visibility flag, the rays cast, the light's mean direction, the spread, the
-    /// exact flag and the refinement's visible coefficient.
+    /// exact flag, the refinement's visible coefficient and the two witnesses.
     pub(crate) fn eval_out(&self) -> usize {
-        self.link_k + 9
+        self.link_k + 11
     }
 
     /// Floats a gathered receiver hands back: irradiance per side and band.

@@ -187,6 +187,66 @@ pub(crate) fn radiosity_towards(
     }
 }
 
+/// True when link `l` carries its witnesses' radiosities (see [`witness_radiosity`]).
+pub(crate) fn witnessed(l: &super::records::Link) -> bool {
+    Elem(l.emit).kind() == Kind::Cluster && (l.witness[0] != NONE || l.witness[1] != NONE)
+}
+
+/// The radiosity (W/m^2 per band) a link gathered from a cluster carries to receiving side
+/// `r`: that of the polygon sides its samples met, two of them drawn by their shares of its
+/// coefficient (see `Link::witness`): for a two-sided patch the one drawn for that side,
+/// else the mean of both. Unbiased for what the samples saw, where the mean radiosity of the
+/// cluster's polygons facing the receiver is not (soil under a canopy sees its dark lower
+/// leaves, not the mean leaf).
+pub(crate) fn witness_radiosity(
+    st: &State,
+    ws: &[u8],
+    l: &super::records::Link,
+    r: usize,
+    per_side: bool,
+    unit: bool,
+    out: &mut [f32],
+) {
+    if unit {
+        out.fill(1.0);
+        return;
+    }
+    out.fill(0.0);
+    let picks: &[u32] = if per_side {
+        let w = if l.witness[r] != NONE {
+            l.witness[r]
+        } else {
+            l.witness[1 - r]
+        };
+        &[w][..]
+    } else {
+        &l.witness[..]
+    };
+    let mut count = 0.0f32;
+    let mut acc = [0.0f32; 8];
+    for &id in picks {
+        if id == NONE {
+            continue;
+        }
+        count += 1.0;
+        let (poly, side) = (id & 0x7FFF_FFFF, (id >> 31) as usize);
+        let root = Elem(st.polygon(ws, poly).root);
+        let p = st.patch(ws, root);
+        let exposed = p.area * p.exposed;
+        if exposed <= 0.0 || side >= State::sides(root) {
+            continue;
+        }
+        for (a, v) in acc.iter_mut().zip(st.polygon_power(ws, poly, side)) {
+            *a += v / exposed;
+        }
+    }
+    if count > 0.0 {
+        for (o, a) in out.iter_mut().zip(&acc) {
+            *o = a / count;
+        }
+    }
+}
+
 struct Ctx<'a> {
     st: &'a mut State,
     ws: &'a mut [u8],
@@ -225,6 +285,13 @@ pub(crate) fn link_fluxes<E: Executor>(
                 }
                 let k = c.st.link_k(c.ws, i as u32);
                 let at = centre(c.st, c.ws, recv);
+                if witnessed(&l) {
+                    witness_radiosity(c.st, c.ws, &l, 0, false, unit, &mut b[..nb]);
+                    for (f, v) in o.iter_mut().zip(&b[..nb]) {
+                        *f += k[0] * v;
+                    }
+                    continue;
+                }
                 for s in 0..kk.min(2) {
                     let coef = if kk == 1 { k[0] } else { k[s] };
                     if coef == 0.0

@@ -156,6 +156,10 @@ pub(crate) struct Link {
     pub dir: [f32; 3],
     /// For a receiving patch: how much the coefficient varies over it (see `refine`).
     pub spread: f32,
+    /// For a link gathered from a cluster: two polygon sides among those its samples met,
+    /// each drawn by its share of the coefficient (polygon index, side in the top bit), or
+    /// `NONE`: whose radiosities the link carries (see `oriented::witness_radiosity`).
+    pub witness: [u32; 2],
 }
 
 /// Patch `shape` bit: the patch's received links changed (see `Patch::stale`).

@@ -48,6 +48,7 @@ pub(crate) fn add_link(
             k_seen: 0.0,
             dir: [0.0; 3],
             spread: 0.0,
+            witness: [NONE; 2],
         },
     );
     st.link_k_mut(ws, i).fill(0.0);
@@ -135,6 +136,8 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 o[kk + 6] = co.spread;
                 o[kk + 7] = if co.exact { 1.0 } else { 0.0 };
                 o[kk + 8] = co.seen;
+                o[kk + 9] = f32::from_bits(co.witness[0]);
+                o[kk + 10] = f32::from_bits(co.witness[1]);
             }
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
@@ -149,6 +152,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 l.dir = [o[kk + 3], o[kk + 4], o[kk + 5]];
                 l.spread = o[kk + 6];
                 l.k_seen = o[kk + 8];
+                l.witness = [o[kk + 9].to_bits(), o[kk + 10].to_bits()];
                 l.flags = (l.flags & !(PENDING | EXACT))
                     | if o[kk + 1] != 0.0 { PARTIAL } else { 0 }
                     | if o[kk + 7] != 0.0 { EXACT } else { 0 };

@@ -211,6 +211,29 @@ pub(crate) fn gather<E: Executor>(
                     let l = c.st.link(c.ws, cur);
                     let k = c.st.link_k(c.ws, cur);
                     let emit = Elem(l.emit);
+                    if super::oriented::witnessed(&l) {
+                        let per_side = State::sides(recv) == 2;
+                        for r in 0..if kk == 1 { 1 } else { 2 } {
+                            let coef = if kk == 1 { k[0] } else { k[r * 2] };
+                            if coef == 0.0 {
+                                continue;
+                            }
+                            super::oriented::witness_radiosity(
+                                c.st,
+                                c.ws,
+                                &l,
+                                r,
+                                per_side,
+                                unit,
+                                &mut b[..nb],
+                            );
+                            for (hb, bb) in h[r * nb..(r + 1) * nb].iter_mut().zip(&b[..nb]) {
+                                *hb += coef as f64 * *bb as f64;
+                            }
+                        }
+                        cur = l.next;
+                        continue;
+                    }
                     for s in 0..kk.min(2) {
                         let any = if kk == 1 {
                             k[0] != 0.0
