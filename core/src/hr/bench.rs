@@ -99,7 +99,7 @@ pub fn probe_gather<V: Visibility + ?Sized>(
     for _ in 0..up {
         at = ids::Elem::new(ids::Kind::Cluster, st.cluster(ws, at.index()).parent);
     }
-    let (k, _, _) = cluster_kernel::gathered(
+    let (k, _, _, _) = cluster_kernel::gathered(
         st,
         ws,
         at,

@@ -239,34 +239,6 @@ pub(crate) enum Plane {
     Sides(Vec3, usize),
 }
 
-/// What the surfaces of cluster `e` bring the point `x`, polygon by polygon, estimated by
-/// descent: each of `rays` samples walks down `e`'s tree choosing a child in proportion to
-/// a cheap guess of what it brings (its area over its squared distance, nothing from a box
-/// wholly behind a receiving plane), ends on one polygon and takes its exact form factor to
-/// the receiving side(s) at `x` (summed over the sides a receiving polygon has) times one
-/// visibility ray to it (none without `occlude`), divided by the probability of the walk. The mean is the visible
-/// form factor of the cluster's polygons, unbiased whatever the guesses: close by, a volume
-/// of uniform radiance misjudges both how much its near and far leaves bring and how much of
-/// them `x` sees (a plant's neighbours got a quarter of its light). Returns the estimate, the
-/// light's mean direction (towards the emitter; length: its collimation) and the same
-/// without occlusion.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn gathered<V: Visibility + ?Sized>(
-    st: &State,
-    ws: &[u8],
-    e: Elem,
-    x: Vec3,
-    plane: Plane,
-    skip: u32,
-    seed: u32,
-    rays: u32,
-    occlude: bool,
-    vis: &V,
-) -> (f32, Vec3, f32) {
-    let (k, d, o, _) = gathered_witnessed(st, ws, e, x, plane, skip, seed, rays, occlude, vis);
-    (k, d, o)
-}
-
 /// Two polygon sides drawn among the samples of a gathered link, each with probability its
 /// share of their summed contributions `total` (see `Link::witness`).
 #[derive(Clone, Copy, Debug)]
@@ -295,9 +267,20 @@ impl Witnesses {
     }
 }
 
-/// [`gathered`], and two of the polygon sides its samples met, drawn by their contributions.
+/// What the surfaces of cluster `e` bring the point `x`, polygon by polygon, estimated by
+/// descent: each of `rays` samples walks down `e`'s tree choosing a child in proportion to
+/// a cheap guess of what it brings (its area over its squared distance, nothing from a box
+/// wholly behind a receiving plane), ends on one polygon and takes its exact form factor to
+/// the receiving side(s) at `x` (summed over the sides a receiving polygon has) times one
+/// visibility ray to it (none without `occlude`), divided by the probability of the walk. The mean is the visible
+/// form factor of the cluster's polygons, unbiased whatever the guesses: close by, a volume
+/// of uniform radiance misjudges both how much its near and far leaves bring and how much of
+/// them `x` sees (a plant's neighbours got a quarter of its light). Returns the estimate, the
+/// light's mean direction (towards the emitter; length: its collimation), the same
+/// without occlusion, and two of the polygon sides its samples met, drawn by their
+/// contributions (see `Link::witness`).
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn gathered_witnessed<V: Visibility + ?Sized>(
+pub(crate) fn gathered<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
     e: Elem,

@@ -9,9 +9,12 @@
 //! polygon whose side facing the point emits nothing). Unbiased: every polygon that can
 //! light the point has a positive probability.
 
+use super::final_gather::{Receiver, patch_corners};
 use super::ids::{Elem, Kind};
 use super::state::State;
-use crate::formfactor::facing_side;
+use crate::formfactor::{facing_side, point_polygon};
+use crate::sampling::{hash3, point_on, unit2};
+use crate::visibility::Visibility;
 use glam::Vec3;
 
 /// Clusters in a light cut.
@@ -147,6 +150,55 @@ pub(crate) fn draw(
             });
         }
     }
+}
+
+/// Adds to `c` the irradiance at the leaf's sample from one emitting polygon drawn down the
+/// leaf's light cut (`pick` in [0, 1)): its exact unoccluded form factor from the point times
+/// one visibility ray, over the probability it was drawn with. Returns the rays cast.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn light<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    vis: &V,
+    leaf: &Receiver,
+    cut: &Cut,
+    pick: f64,
+    h: u32,
+    c: &mut [f32],
+) -> u32 {
+    let (x, n) = (leaf.x, leaf.nrm);
+    let Some(d) = draw(st, ws, cut, x, n, pick, leaf.poly) else {
+        return 0;
+    };
+    if d.prob.is_nan() || d.prob <= 0.0 {
+        return 0;
+    }
+    let lp = st.polygon(ws, d.poly);
+    let (lc, k) = patch_corners(st, ws, Elem(lp.root));
+    let Some(side) = facing_side(x, lc[0], Vec3::from(lp.normal)) else {
+        return 0;
+    };
+    let m = st.material(ws, lp.material);
+    let f = point_polygon(x, n, &lc[..k]);
+    if !(f.is_finite() && f > 0.0) {
+        return 0;
+    }
+    for attempt in 0..8u32 {
+        let (u, v) = unit2(hash3(h, attempt, 0x9F));
+        let y = point_on(&lc[..k], u, v);
+        if n.dot(y - x) <= 0.0 {
+            continue;
+        }
+        let t = vis.transmittance(x, y, [leaf.poly, d.poly]);
+        if t > 0.0 {
+            let scale = t * f / d.prob;
+            for (ck, e) in c.iter_mut().zip(&m.emit[side][..st.bands]) {
+                *ck += scale * e;
+            }
+        }
+        return 1;
+    }
+    0
 }
 
 /// The item among `count` whose cumulative weight passes `target`: (index, weight before

@@ -12,7 +12,7 @@
 
 use super::cluster_kernel::{
     Plane, SMALL_CLUSTER, Witnesses, box_form_factor, box_projected_area, cluster_form_factor,
-    cluster_polygon, gathered_witnessed, near_field, outside, shared_area, small_cluster,
+    cluster_polygon, gathered, near_field, outside, shared_area, small_cluster,
 };
 use super::ids::Elem;
 use super::sample::{point_facing, point_toward};
@@ -288,7 +288,7 @@ fn gather_link<V: Visibility + ?Sized>(
                 for side in 0..recv_sides(r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
-                    let (k, _, open, wq) = gathered_witnessed(
+                    let (k, _, open, wq) = gathered(
                         st,
                         ws,
                         emit,
@@ -363,7 +363,7 @@ fn gather_link<V: Visibility + ?Sized>(
                 }
                 let rec = st.polygon(ws, px);
                 let sides = State::sides(Elem(rec.root));
-                let (irr, d, o, wq) = gathered_witnessed(
+                let (irr, d, o, wq) = gathered(
                     st,
                     ws,
                     emit,

@@ -316,7 +316,7 @@ fn leaf<V: Visibility + ?Sized>(
             let h = hash3(seed, j, 0xE3);
             let pick = (j as f64 + unit2(h).0 as f64) / n as f64;
             let leaf = Receiver { poly, nrm, x };
-            cast += drawn_light(st, ws, vis, &leaf, cut, pick, h, &mut c[..nb]);
+            cast += super::emitter_tree::light(st, ws, vis, &leaf, cut, pick, h, &mut c[..nb]);
         } else if total > 0.0 {
             let h = hash3(seed, j, 0xE3);
             let pick = (j as f32 + unit2(h).0) / n as f32;
@@ -363,10 +363,10 @@ struct Share {
 }
 
 /// A sample point of a receiving leaf patch of polygon `poly`, facing `nrm`.
-struct Receiver {
-    poly: u32,
-    nrm: Vec3,
-    x: Vec3,
+pub(crate) struct Receiver {
+    pub poly: u32,
+    pub nrm: Vec3,
+    pub x: Vec3,
 }
 
 /// Fills `shares` for a leaf patch (`corners`, receiving normal `nrm`); returns their sum.
@@ -510,57 +510,8 @@ fn emitted_light<V: Visibility + ?Sized>(
     0
 }
 
-/// Adds to `c` the irradiance at the leaf's sample from one emitting polygon drawn down the
-/// leaf's light cut (`pick` in [0, 1)): its exact unoccluded form factor from the point times
-/// one visibility ray, over the probability it was drawn with. Returns the rays cast.
-#[allow(clippy::too_many_arguments)]
-fn drawn_light<V: Visibility + ?Sized>(
-    st: &State,
-    ws: &[u8],
-    vis: &V,
-    leaf: &Receiver,
-    cut: &super::emitter_tree::Cut,
-    pick: f64,
-    h: u32,
-    c: &mut [f32],
-) -> u32 {
-    let (x, n) = (leaf.x, leaf.nrm);
-    let Some(d) = super::emitter_tree::draw(st, ws, cut, x, n, pick, leaf.poly) else {
-        return 0;
-    };
-    if d.prob.is_nan() || d.prob <= 0.0 {
-        return 0;
-    }
-    let lp = st.polygon(ws, d.poly);
-    let (lc, k) = patch_corners(st, ws, Elem(lp.root));
-    let Some(side) = facing_side(x, lc[0], Vec3::from(lp.normal)) else {
-        return 0;
-    };
-    let m = st.material(ws, lp.material);
-    let f = point_polygon(x, n, &lc[..k]);
-    if !(f.is_finite() && f > 0.0) {
-        return 0;
-    }
-    for attempt in 0..8u32 {
-        let (u, v) = unit2(hash3(h, attempt, 0x9F));
-        let y = point_on(&lc[..k], u, v);
-        if n.dot(y - x) <= 0.0 {
-            continue;
-        }
-        let t = vis.transmittance(x, y, [leaf.poly, d.poly]);
-        if t > 0.0 {
-            let scale = t * f / d.prob;
-            for (ck, e) in c.iter_mut().zip(&m.emit[side][..st.bands]) {
-                *ck += scale * e;
-            }
-        }
-        return 1;
-    }
-    0
-}
-
 /// A patch's corners and their count.
-fn patch_corners(st: &State, ws: &[u8], e: Elem) -> ([Vec3; 4], usize) {
+pub(crate) fn patch_corners(st: &State, ws: &[u8], e: Elem) -> ([Vec3; 4], usize) {
     let p = st.patch(ws, e);
     let mut corners = [Vec3::ZERO; 4];
     for (c, src) in corners.iter_mut().zip(p.corners) {
