@@ -31,11 +31,30 @@ fn main() {
     for _ in 0..3 {
         bench::gather(&mut snap, &mut ws, &vis, &mut exec);
     }
+    if let Ok(l) = std::env::var("LINK") {
+        let ids: Vec<u32> = l.split(',').map(|s| s.parse().unwrap()).collect();
+        let mut ks: Vec<f32> = (0..400)
+            .map(|s| {
+                bench::probe_link_seeded(&snap, &mut ws, &vis, ids[0], ids[1], s * 7919 + 13, 4)[0]
+                    [0]
+            })
+            .collect();
+        ks.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        let mean: f32 = ks.iter().sum::<f32>() / ks.len() as f32;
+        println!(
+            "mean {mean:.4} q: {:?}",
+            [0, 40, 100, 200, 300, 360, 390, 396, 399].map(|i| ks[i])
+        );
+        return;
+    }
     let (links, nb) = bench::link_slots(&snap);
     let mut carried = vec![0.0f64; links * nb];
     let mut traced = vec![0.0f64; links * nb];
     let left = bench::audit(&snap, &mut ws, &vis, rays, &mut carried, &mut traced);
-    let band = nb - 1;
+    let band = std::env::var("AUDIT_BAND")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(nb - 1);
     let dist = bench::distributed(&snap, &mut ws)[band];
     let mut into_clusters = 0.0;
     for i in 0..links as u32 {

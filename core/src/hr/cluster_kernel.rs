@@ -316,7 +316,7 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
             let mut guesses = [0.0f32; 16];
             let kids = c.child_count.min(16);
             for k in 0..kids {
-                let g = guess(st, ws, st.child(ws, c.children + k), x, nr);
+                let g = guess(st, ws, st.child(ws, c.children + k), x, plane);
                 guesses[k as usize] = g;
                 total += g;
             }
@@ -348,26 +348,10 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
         }
         // One polygon (a root patch).
         let p = st.patch(ws, cur);
-        let rec = st.polygon(ws, p.poly);
-        let normal = Vec3::from(rec.normal);
-        let mut corners = [Vec3::ZERO; 4];
-        for (c, src) in corners.iter_mut().zip(p.corners) {
-            *c = src.into();
-        }
-        let corners = &corners[..p.corner_count()];
-        let Some(side) = facing_side(x, corners[0], normal) else {
+        let Some((value, side, (corners, m))) = polygon_value(st, ws, cur, x, plane) else {
             continue;
         };
-        if side >= State::sides(cur) {
-            continue;
-        }
-        let value = match plane {
-            Plane::Facing(n) | Plane::Sides(n, 1) => point_polygon(x, n, corners),
-            Plane::Sides(n, _) => point_polygon(x, n, corners) + point_polygon(x, -n, corners),
-        };
-        if !(value.is_finite() && value > 0.0) {
-            continue;
-        }
+        let corners = &corners[..m];
         let (omega, phi) = point_polygon_light(x, corners);
         let towards = if omega.is_finite() && omega > 0.0 {
             phi * (PI / omega)
@@ -426,29 +410,47 @@ pub(crate) fn shared_area(st: &State, ws: &[u8], cluster: u32, dir: Vec3) -> f32
     sum
 }
 
-/// A cheap guess of what element `e` brings the point `x` (receiving plane normal `nr`):
-/// its area over its squared distance (plus its radius squared, so that a box around `x`
-/// stays finite), nothing when its box lies wholly behind the receiving plane.
-fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: Option<Vec3>) -> f32 {
+/// What element `e` may bring the point `x` (receiving `plane`), to draw from: a polygon's
+/// exact form factor (0 when it turns its one side away), a cluster's bound: its area
+/// times the largest cosine at `x` over pi times the squared distance to its box, at most 1
+/// (a hemisphere), nothing when its box lies wholly behind the receiving plane. Drawn by
+/// guesses from the boxes' centres, the floor right in front of a skirting board was drawn
+/// one time in a hundred and weighted a hundredfold: such links were heavy-tailed (most
+/// estimates far too low, a few ten times too high).
+fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, plane: Plane) -> f32 {
+    let nr = match plane {
+        Plane::Facing(n) | Plane::Sides(n, 1) => Some(n),
+        Plane::Sides(..) => None,
+    };
     let (lo, hi, a) = match e.kind() {
         Kind::Cluster => {
             let c = st.cluster(ws, e.index());
             (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max), c.area)
         }
         Kind::Source => return 0.0,
-        _ => {
-            let p = st.patch(ws, e);
-            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            for c in &p.corners[..p.corner_count()] {
-                lo = lo.min(Vec3::from(*c));
-                hi = hi.max(Vec3::from(*c));
-            }
-            (lo, hi, p.area)
-        }
+        _ => return polygon_value(st, ws, e, x, plane).map_or(0.0, |(v, _, _)| v),
     };
     if a <= 0.0 {
         return 0.0;
     }
+    let d2 = (x.clamp(lo, hi) - x).length_squared();
+    // Close by (within its radius), the form factor of its box: exact for a flat cluster
+    // (a floor's tiles), at worst too large for a volume; a box around `x`, a hemisphere.
+    if d2 < 0.25 * (hi - lo).length_squared() {
+        let (n, both) = match plane {
+            Plane::Facing(n) | Plane::Sides(n, 1) => (n, false),
+            Plane::Sides(n, _) => (n, true),
+        };
+        if !outside(x, lo, hi) {
+            return if both { 2.0 } else { 1.0 };
+        }
+        let mut f = box_form_factor(x, n, lo, hi);
+        if both {
+            f += box_form_factor(x, -n, lo, hi);
+        }
+        return f;
+    }
+    let mut cos = 1.0f32;
     if let Some(nr) = nr {
         // The box corner farthest along the normal.
         let far = Vec3::new(
@@ -456,11 +458,44 @@ fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, nr: Option<Vec3>) -> f32 {
             if nr.y > 0.0 { hi.y } else { lo.y },
             if nr.z > 0.0 { hi.z } else { lo.z },
         );
-        if nr.dot(far - x) <= 0.0 {
+        let reach = nr.dot(far - x);
+        if reach <= 0.0 {
             return 0.0;
         }
+        if d2 > 0.0 {
+            cos = (reach / libm::sqrtf(d2)).min(1.0);
+        }
     }
-    let c = (lo + hi) * 0.5;
-    let r2 = 0.25 * (hi - lo).length_squared();
-    a / ((c - x).length_squared() + r2).max(f32::MIN_POSITIVE)
+    (a * cos / (PI * d2).max(f32::MIN_POSITIVE)).min(1.0)
+}
+
+/// The exact form factor from `x` (receiving `plane`) to the polygon of root patch `e`, with
+/// its side facing `x` and its corners; `None` when it sends `x` nothing (its one side
+/// turned away, or wholly behind the plane).
+fn polygon_value(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    x: Vec3,
+    plane: Plane,
+) -> Option<(f32, usize, ([Vec3; 4], usize))> {
+    let p = st.patch(ws, e);
+    let rec = st.polygon(ws, p.poly);
+    let normal = Vec3::from(rec.normal);
+    let mut corners = [Vec3::ZERO; 4];
+    for (c, src) in corners.iter_mut().zip(p.corners) {
+        *c = src.into();
+    }
+    let m = p.corner_count();
+    let side = facing_side(x, corners[0], normal)?;
+    if side >= State::sides(e) {
+        return None;
+    }
+    let value = match plane {
+        Plane::Facing(n) | Plane::Sides(n, 1) => point_polygon(x, n, &corners[..m]),
+        Plane::Sides(n, _) => {
+            point_polygon(x, n, &corners[..m]) + point_polygon(x, -n, &corners[..m])
+        }
+    };
+    (value.is_finite() && value > 0.0).then_some((value, side, (corners, m)))
 }

@@ -16,6 +16,7 @@ use super::cluster_kernel::{
 };
 use super::ids::Elem;
 use super::sample::{point_facing, point_toward};
+use super::shoot::{box_share, shoot};
 use super::state::{Shape, State};
 use crate::formfactor::{facing_side, point_polygon};
 use crate::limits::NONE;
@@ -113,7 +114,10 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
 ) -> Coefficients {
     let seed = hash3(recv.0, emit.0, 0x11AD);
     let rays = st.settings.rays.max(1);
-    let mut out = evaluate_seeded(st, ws, recv, emit, vis, seed, rays, true);
+    let mut out = match shot(st, ws, recv, emit, seed, rays, vis) {
+        Some(c) => c,
+        None => evaluate_seeded(st, ws, recv, emit, vis, seed, rays, true),
+    };
     // The choice needs an idea of the size: a quarter of the rays, or, where the light is
     // gathered polygon by polygon, as many samples as the light goes by, without occlusion
     // (no rays: a few samples of a large receiver under a few lamps land where they do not
@@ -340,20 +344,42 @@ fn gather_link<V: Visibility + ?Sized>(
             // towards the emitter, four points of a handful of leaves left whole clusters
             // 10% off), with rays shared among them; a larger one at least 4 points.
             let small = rc.polygons <= SMALL_CLUSTER;
+            // A handful of polygons gets 2 or 4 points each, one per stratum of the polygon:
+            // the light of a large emitter close by varies across a face (a box by a wall),
+            // and one point per face made such links heavy-tailed.
+            let per = if !small {
+                1
+            } else if 4 * rc.polygons <= SMALL_CLUSTER {
+                4
+            } else if 2 * rc.polygons <= SMALL_CLUSTER {
+                2
+            } else {
+                1
+            };
             let (points, rays) = if small {
-                (rc.polygons, (4 * rays).div_ceil(rc.polygons.max(1)).max(1))
+                let points = rc.polygons * per;
+                (points, (4 * rays).div_ceil(points.max(1)).max(1))
             } else {
                 (rays.max(4), rays)
             };
             for k in 0..points {
                 let (x, px, w) = if small {
-                    let (poly, corners, n) = cluster_polygon(st, ws, rc.first_polygon + k);
+                    let (poly, corners, n) = cluster_polygon(st, ws, rc.first_polygon + k / per);
                     let (u, v) = unit2(hash3(seed, k, 0xC3));
+                    let s = k % per;
+                    let (u, v) = match per {
+                        4 => (0.5 * ((s & 1) as f32 + u), 0.5 * ((s >> 1) as f32 + v)),
+                        2 => (0.5 * (s as f32 + u), v),
+                        _ => (u, v),
+                    };
                     let a = st.patch(ws, Elem(st.polygon(ws, poly).root)).area;
+                    // Each stratum's share of the area (a quad's map is not area-preserving).
+                    let jac = super::direct::jacobian(&corners[..n], u, v)
+                        / super::direct::mean_jacobian(&corners[..n]);
                     (
                         point_on(&corners[..n], u, v),
                         poly,
-                        a * points as f32 / r_area,
+                        a * jac * points as f32 / (per as f32 * r_area),
                     )
                 } else {
                     point_toward(st, ws, recv, at, reach, hash3(seed, k, 0xC1))
@@ -407,6 +433,71 @@ fn gather_link<V: Visibility + ?Sized>(
     if emit.kind() == super::ids::Kind::Cluster {
         out.witness = witnesses(r, &wit);
     }
+}
+
+/// Fraction of an emitter's view that a receiving cluster's box must fill for its link to
+/// be shot from the emitter ([`shoot`]) rather than gathered at points of the receiver.
+const SHOOT_SHARE: f32 = 0.25;
+
+/// The same for an emitter smaller than its receiver.
+const SHOOT_SHARE_SMALL: f32 = 0.05;
+
+/// The coefficients that link `recv <- emit` carries, shot from the emitter ([`shoot`]),
+/// or `None` when it is not shot. Links from a cluster, or from a patch into a cluster, are
+/// shot when the receiver's box fills much of the emitter's view (judged apart from the
+/// shots themselves, so that the choice does not bias them). The decisions still come from
+/// samples of the receiver (how its light varies, see [`evaluate`]).
+fn shot<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    emit: Elem,
+    seed: u32,
+    rays: u32,
+    vis: &V,
+) -> Option<Coefficients> {
+    use super::ids::Kind;
+    let patch_emitter = !matches!(emit.kind(), Kind::Cluster | Kind::Source);
+    if emit.kind() == Kind::Source || (patch_emitter && recv.kind() != Kind::Cluster) {
+        return None;
+    }
+    // An emitter smaller than its receiver is shot even when it sees little of it: the
+    // receiver's few fixed points miss where its light peaks (a wall beside a chair), and
+    // shots that miss the receiver's box cost no ray.
+    let smaller = super::sample::area(st, ws, emit) < super::sample::area(st, ws, recv);
+    let least = if smaller {
+        SHOOT_SHARE_SMALL
+    } else {
+        SHOOT_SHARE
+    };
+    if box_share(st, ws, recv, emit, hash3(seed, 0xB0C5, 2), 32) < least {
+        return None;
+    }
+    let n = (4 * rays * rays).max(16);
+    let shot = shoot(st, ws, recv, emit, hash3(seed, 0x5407, 1), n, vis);
+    let mut out = Coefficients {
+        exact: true,
+        rays: n,
+        dir: shot.dir,
+        ..Coefficients::default()
+    };
+    if recv.kind() == Kind::Cluster {
+        let taken = shared_area(st, ws, recv.index(), shot.dir);
+        if taken > 0.0 {
+            out.k[0] = [shot.power[0][0] / taken, shot.power[0][1] / taken];
+        }
+        out.witness = shot.wit[0].pick;
+    } else {
+        let area = st.patch(ws, recv).area;
+        if area > 0.0 {
+            for (k, p) in out.k.iter_mut().zip(shot.power) {
+                *k = [p[0] / area, p[1] / area];
+            }
+        }
+        let r = st.shape(ws, recv);
+        out.witness = witnesses(&r, &shot.wit);
+    }
+    Some(out)
 }
 
 /// A link's witnesses from those drawn per receiving side: one per side for a two-sided

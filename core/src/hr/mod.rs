@@ -37,6 +37,7 @@ mod pool;
 mod records;
 mod refine;
 mod sample;
+mod shoot;
 mod solve;
 mod state;
 mod vis;
