@@ -461,10 +461,12 @@ fn shot<V: Visibility + ?Sized>(
     if emit.kind() == Kind::Source || (patch_emitter && recv.kind() != Kind::Cluster) {
         return None;
     }
-    // An emitter smaller than its receiver is shot even when it sees little of it: the
-    // receiver's few fixed points miss where its light peaks (a wall beside a chair), and
-    // shots that miss the receiver's box cost no ray.
-    let smaller = super::sample::area(st, ws, emit) < super::sample::area(st, ws, recv);
+    // A cluster smaller than the patch it lights is shot even when it sees little of it:
+    // the patch's few fixed points miss where its light peaks (a wall beside a chair), and
+    // shots that miss the patch's box cost no ray. Not into a cluster: a sparse one (leaves
+    // at a distance) is met by a few of the shots that enter its box, or none.
+    let smaller = recv.kind() != Kind::Cluster
+        && super::sample::area(st, ws, emit) < super::sample::area(st, ws, recv);
     let least = if smaller {
         SHOOT_SHARE_SMALL
     } else {
