@@ -155,12 +155,6 @@ pub(crate) fn outside(x: Vec3, min: Vec3, max: Vec3) -> bool {
     x.cmplt(min).any() || x.cmpgt(max).any()
 }
 
-/// Area of the box's shadow along the unit direction `w` (m^2).
-pub(crate) fn box_projected_area(min: Vec3, max: Vec3, w: Vec3) -> f32 {
-    let d = max - min;
-    w.x.abs() * d.y * d.z + w.y.abs() * d.x * d.z + w.z.abs() * d.x * d.y
-}
-
 /// The faces of a box that face the outside point `x` (at most three), through `f`.
 pub(crate) fn box_faces(x: Vec3, min: Vec3, max: Vec3, mut f: impl FnMut(&[Vec3; 4])) {
     for axis in 0..3 {
@@ -198,37 +192,6 @@ pub(crate) fn box_form_factor(x: Vec3, n: Vec3, min: Vec3, max: Vec3) -> f32 {
     let mut sum = 0.0f32;
     box_faces(x, min, max, |c| sum += point_polygon(x, n, c));
     sum.min(1.0)
-}
-
-/// True when a link from the large cluster `emit` to `recv` is evaluated by gathering
-/// ([`gathered`]): the receiver lies within two of the emitter's radii of its centre, where
-/// a volume of uniform radiance misjudges both how much its near and far parts bring and how
-/// much of them a point sees.
-pub(crate) fn near_field(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
-    if emit.kind() != Kind::Cluster || small_cluster(st, ws, emit) {
-        return false;
-    }
-    let c = st.cluster(ws, emit.index());
-    let (lo, hi) = (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max));
-    let r_e = 0.5 * (hi - lo).length();
-    let (cr, rr) = match st.shape(ws, recv) {
-        super::state::Shape::Cluster { min, max, .. } => {
-            ((min + max) * 0.5, 0.5 * (max - min).length())
-        }
-        super::state::Shape::Patch { corners, n, .. } => {
-            let mut s = Vec3::ZERO;
-            for c in &corners[..n] {
-                s += *c;
-            }
-            let m = s / n as f32;
-            let r = corners[..n]
-                .iter()
-                .fold(0.0f32, |a, c| a.max((*c - m).length()));
-            (m, r)
-        }
-        super::state::Shape::Source { .. } => return false,
-    };
-    ((lo + hi) * 0.5 - cr).length() < 2.0 * r_e + rr
 }
 
 /// Where a point receives: on one side (the plane's normal), or on the sides of the polygon

@@ -1,21 +1,20 @@
 //! Link coefficients: how much irradiance a receiver gets per unit radiosity of an emitter.
 //!
 //! * to a patch: the average over the patch's fixed quadrature points of the exact
-//!   point-to-polygon form factor (for a patch emitter) or of the isotropic-cluster and
-//!   directional-source kernels, times the fraction of unblocked visibility rays;
-//! * to a cluster: the flux density on a plane facing the emitter, from points spread over
-//!   the cluster's surfaces (isotropic volume).
+//!   point-to-polygon form factor (a patch emitter, a small cluster's polygons) or of the
+//!   directional-source kernel, times the fraction of unblocked visibility rays;
+//! * from a larger cluster or to a cluster: gathered polygon by polygon ([`gather_link`]),
+//!   or shot from the emitter where the receiver fills its view ([`shot`]).
 //!
-//! Kernels for clusters are bounded for close elements (`A / (4 pi r^2 + A)` instead of
-//! `A / (4 pi r^2)`), so that sums never blow up. Every sample point comes from a hash of the
-//! two elements, so a link's value never depends on when or on which thread it is computed.
+//! Every sample point comes from a hash of the two elements, so a link's value never
+//! depends on when or on which thread it is computed.
 
 use super::cluster_kernel::{
-    Plane, SMALL_CLUSTER, Witnesses, box_form_factor, box_projected_area, cluster_form_factor,
-    cluster_polygon, gathered, near_field, outside, shared_area, small_cluster,
+    Plane, SMALL_CLUSTER, Witnesses, cluster_form_factor, cluster_polygon, gathered, shared_area,
+    small_cluster,
 };
 use super::ids::Elem;
-use super::sample::{point_facing, point_toward};
+use super::sample::point_toward;
 use super::shoot::{box_share, shoot};
 use super::state::{Shape, State};
 use crate::formfactor::{facing_side, point_polygon};
@@ -24,7 +23,6 @@ use crate::sampling::{
     MAX_CLIPPED_QUADRATURE, MAX_QUADRATURE, clipped_quadrature, hash3, point_on, quadrature, unit2,
 };
 use crate::visibility::Visibility;
-use core::f32::consts::PI;
 use glam::Vec3;
 
 /// Coefficients of one link, by receiving side and emitting side.
@@ -145,11 +143,15 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
     out
 }
 
-/// True when link `recv <- emit` is evaluated polygon by polygon ([`gather_link`]): from a
-/// large cluster close by, or to a cluster.
+/// True when link `recv <- emit` is evaluated polygon by polygon ([`gather_link`]): to a
+/// cluster, or from a cluster too large to sum exactly. A large cluster taken as a volume of
+/// uniform radiance (a box kernel times its oriented emission) gave patches a third too
+/// little of its light in a furnished room, and misjudged close receivers both ways.
 fn gathered_link(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
-    emit.kind() != super::ids::Kind::Source
-        && (recv.kind() == super::ids::Kind::Cluster || near_field(st, ws, recv, emit))
+    use super::ids::Kind;
+    emit.kind() != Kind::Source
+        && (recv.kind() == Kind::Cluster
+            || (emit.kind() == Kind::Cluster && !small_cluster(st, ws, emit)))
 }
 
 /// One estimate of a link's coefficients from `seed`, with `rays` rays per point; without
@@ -172,11 +174,6 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
         witness: [NONE; 2],
         ..Coefficients::default()
     };
-    // The direction in which the gather takes an emitting cluster's radiance (see
-    // `oriented::radiosity_towards`): its kernel is scaled by its projected area that way, so
-    // that kernel x emission is the box's form factor x the radiance it sends that way.
-    let towards = (super::oriented::centre(st, ws, recv) - super::oriented::centre(st, ws, emit))
-        .normalize_or_zero();
     if gathered_link(st, ws, recv, emit) {
         gather_link(st, ws, recv, &r, emit, seed, rays, occlude, vis, &mut out);
         return out;
@@ -212,9 +209,8 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
                 for side in 0..recv_sides(&r) {
                     let nr = if side == 0 { normal } else { -normal };
                     let qs = hash3(seed, q as u32, side as u32);
-                    let (contrib, open, s_side, wq) = to_point(
-                        st, ws, x, nr, poly, &e, emit, towards, qs, rays, vis, &mut out,
-                    );
+                    let (contrib, open, s_side, wq) =
+                        to_point(st, ws, x, nr, poly, &e, emit, qs, rays, vis, &mut out);
                     out.open += plain[q] * open;
                     if w == 0.0 {
                         continue;
@@ -691,7 +687,6 @@ fn to_point<V: Visibility + ?Sized>(
     poly: u32,
     e: &Shape,
     emit: Elem,
-    towards: Vec3,
     seed: u32,
     rays: u32,
     vis: &V,
@@ -750,49 +745,8 @@ fn to_point<V: Visibility + ?Sized>(
             out.partial |= v < 1.0;
             (open * v, open, 0, wit)
         }
-        Shape::Cluster { area, min, max } if outside(x, min, max) => {
-            // The cluster as a volume of uniform radiance filling its box: its kernel is the
-            // box's form factor over its projected area (exact for a flat cluster such as a
-            // tiled soil, the point kernel far away, bounded close by).
-            let projected = kernel_projection(x, min, max, towards);
-            let ff = box_form_factor(x, nr, min, max);
-            if projected <= 0.0 || ff <= 0.0 {
-                return (0.0, 0.0, 0, NO);
-            }
-            let open = area * ff / (4.0 * projected);
-            let mut seen = 0.0f32;
-            for j in 0..rays {
-                let (y, py) = point_facing(st, ws, emit, x, Some(nr), hash3(seed, j, 0xB7));
-                seen += vis.transmittance(x, y, [poly, py]);
-            }
-            out.rays += rays;
-            let v = seen / rays as f32;
-            out.partial |= v < 1.0;
-            (open * v, open, 0, NO)
-        }
-        Shape::Cluster { area, .. } => {
-            let (mut sum, mut open) = (0.0f32, 0.0f32);
-            for j in 0..rays {
-                // Not restricted to the receiving side: the kernel counts the part behind as 0.
-                let (y, py) = point_facing(st, ws, emit, x, None, hash3(seed, j, 0xB7));
-                let d = y - x;
-                let d2 = d.length_squared();
-                if d2 <= 0.0 {
-                    continue;
-                }
-                let c = nr.dot(d) / libm::sqrtf(d2);
-                if c <= 0.0 {
-                    continue;
-                }
-                let f = area * c / (4.0 * PI * d2 + area);
-                let v = vis.transmittance(x, y, [poly, py]);
-                out.rays += 1;
-                out.partial |= v < 1.0;
-                sum += f * v;
-                open += f;
-            }
-            (sum / rays as f32, open / rays as f32, 0, NO)
-        }
+        // Larger clusters are gathered polygon by polygon (see `gathered_link`).
+        Shape::Cluster { .. } => (0.0, 0.0, 0, NO),
         Shape::Source { towards } => {
             let c = nr.dot(towards);
             if c <= 0.0 {
@@ -804,26 +758,4 @@ fn to_point<V: Visibility + ?Sized>(
             (c * v, c, 0, NO)
         }
     }
-}
-
-/// The projected area (m^2) by which an emitting cluster's box kernel is scaled at the point
-/// `x` outside it: the box's shadow along `towards`, the direction in which the gather takes
-/// the cluster's radiance (from its centre to the receiver's), so that kernel x emission is
-/// the box's form factor at `x` times the radiance the cluster sends that way (for a uniform
-/// flat cluster, its radiosity: exact). Taking the direction to `x` instead, a point near a
-/// large flat cluster's edge, seen almost edge-on from its centre, had its kernel divided by
-/// a nearly empty shadow while the emission stayed that of the receiver's centre: a floor
-/// gave the skirting along a room's walls a link coefficient of 45 (at most 1 is possible),
-/// and the solution diverged.
-/// The shadow is kept to at least a thousandth of the box's largest face (a link along a
-/// flat cluster's plane then takes less light than it should, never more).
-fn kernel_projection(x: Vec3, min: Vec3, max: Vec3, towards: Vec3) -> f32 {
-    let w = if towards == Vec3::ZERO {
-        (x - (min + max) * 0.5).normalize_or_zero()
-    } else {
-        towards
-    };
-    let d = max - min;
-    let largest = (d.y * d.z).max(d.x * d.z).max(d.x * d.y);
-    box_projected_area(min, max, w).max(1e-3 * largest)
 }

@@ -59,37 +59,6 @@ pub(crate) fn area(s: &State, ws: &[u8], e: Elem) -> f32 {
     }
 }
 
-/// A point on a surface inside `e` that can send light to `x`: on a two-sided polygon or on
-/// the front of a one-sided one facing `x`, and in front of the plane through `x` with
-/// normal `nr` when given (a few draws of [`point_in`]; the last one if none qualifies).
-/// Rays to faces turned away would count the cluster's own front, which hides them, as
-/// shadow.
-pub(crate) fn point_facing(
-    s: &State,
-    ws: &[u8],
-    e: Elem,
-    x: Vec3,
-    nr: Option<Vec3>,
-    seed: u32,
-) -> (Vec3, u32) {
-    let mut last = (x, crate::limits::NONE);
-    for t in 0..4 {
-        let (y, py) = point_in(s, ws, e, hash3(seed, t, 0xFAC3));
-        if py == crate::limits::NONE {
-            return (y, py);
-        }
-        last = (y, py);
-        if nr.is_some_and(|nr| nr.dot(y - x) <= 0.0) {
-            continue;
-        }
-        let rec = s.polygon(ws, py);
-        if State::sides(Elem(rec.root)) == 2 || Vec3::from(rec.normal).dot(x - y) > 0.0 {
-            return (y, py);
-        }
-    }
-    last
-}
-
 /// A point on a surface inside `e` drawn towards `target`: down the cluster tree, each child
 /// is chosen in proportion to its area times `1 / (d^2 + reach^2 + r^2)` (`d` the distance
 /// from its box's centre to `target`, `r` its radius), so that the parts of a large receiver
