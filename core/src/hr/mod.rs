@@ -36,6 +36,7 @@ mod output;
 mod pool;
 mod records;
 mod refine;
+mod rest_scale;
 mod sample;
 mod shoot;
 mod solve;

@@ -332,9 +332,10 @@ const BEAMS: usize = 4;
 
 /// Floats of a cluster's summary: the links of its [`BEAMS`] beams (indices, as bits), then
 /// the total of every link it and its ancestors receive: flux per band, and the sum of
-/// their direction vectors weighted by their flux summed over bands.
+/// their direction vectors weighted by their flux summed over bands; last, the scale of the
+/// merged rest that keeps its power (see `rest_scale`).
 pub(crate) const fn summary_floats(bands: usize) -> usize {
-    BEAMS + bands + 3
+    BEAMS + bands + 4
 }
 
 /// Every cluster's summary of the light that reaches its polygons through the links it and
@@ -412,6 +413,12 @@ fn summarize(st: &State, ws: &mut [u8], select: bool) {
         for (k, b) in beams.iter().enumerate() {
             sum[k] = f32::from_bits(*b);
         }
+        // The rest's scale: kept with the beams, chosen anew with them.
+        sum[len - 1] = if select {
+            super::rest_scale::rest_scale(st, ws, c_index, &beams)
+        } else {
+            st.summary(ws, c_index)[len - 1]
+        };
         st.summary_mut(ws, c_index).copy_from_slice(&sum[..len]);
     }
 }
@@ -501,8 +508,13 @@ fn share(st: &State, ws: &[u8], poly: u32, out: &mut [f32]) {
     }
     let weight: f32 = rest[..nb].iter().sum();
     if weight > 0.0 {
+        // 0: not chosen yet (a summary read before any selection).
+        let scale = match sum[summary_floats(nb) - 1] {
+            s if s > 0.0 => s,
+            _ => 1.0,
+        };
         for r in rest[..nb].iter_mut() {
-            *r = r.max(0.0);
+            *r = r.max(0.0) * scale;
         }
         add(&rest[..nb], rest_dir / weight, out);
     }
