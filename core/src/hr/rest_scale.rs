@@ -40,7 +40,7 @@ pub(crate) fn rest_scale(st: &State, ws: &[u8], c: u32, beams: &[u32]) -> f32 {
                 continue;
             }
             let w: f32 = st.link_flux(ws, index).iter().sum();
-            if !(w > 0.0) {
+            if w.is_nan() || w <= 0.0 {
                 continue;
             }
             let d = Vec3::from(l.dir);
