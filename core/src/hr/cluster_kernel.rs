@@ -373,37 +373,60 @@ pub(crate) fn shared_area(st: &State, ws: &[u8], cluster: u32, dir: Vec3) -> f32
     sum
 }
 
-/// What element `e` may bring the point `x` (receiving `plane`), to draw from: a polygon's
-/// exact form factor (0 when it turns its one side away), a cluster's bound: its area
-/// times the largest cosine at `x` over pi times the squared distance to its box, at most 1
-/// (a hemisphere), nothing when its box lies wholly behind the receiving plane. Drawn by
+/// What element `e` may bring the point `x` (receiving `plane`), to draw from: close by, a
+/// polygon's exact form factor or a cluster's box's; farther, a bound (area times the
+/// largest cosine at `x` over pi times the squared distance to its box, at most 1);
+/// nothing when its box lies wholly behind the receiving plane. Drawn by
 /// guesses from the boxes' centres, the floor right in front of a skirting board was drawn
 /// one time in a hundred and weighted a hundredfold: such links were heavy-tailed (most
 /// estimates far too low, a few ten times too high).
 fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, plane: Plane) -> f32 {
-    let nr = match plane {
-        Plane::Facing(n) | Plane::Sides(n, 1) => Some(n),
-        Plane::Sides(..) => None,
-    };
-    let (lo, hi, a) = match e.kind() {
+    let (lo, hi, a, polygon) = match e.kind() {
         Kind::Cluster => {
             let c = st.cluster(ws, e.index());
-            (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max), c.area)
+            (
+                Vec3::from(c.bbox_min),
+                Vec3::from(c.bbox_max),
+                c.area,
+                false,
+            )
         }
         Kind::Source => return 0.0,
-        _ => return polygon_value(st, ws, e, x, plane).map_or(0.0, |(v, _, _)| v),
+        _ => {
+            let p = st.patch(ws, e);
+            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            for c in &p.corners[..p.corner_count()] {
+                lo = lo.min(Vec3::from(*c));
+                hi = hi.max(Vec3::from(*c));
+            }
+            (lo, hi, p.area, true)
+        }
     };
     if a <= 0.0 {
         return 0.0;
     }
+    let (n, both) = match plane {
+        Plane::Facing(n) | Plane::Sides(n, 1) => (n, false),
+        Plane::Sides(n, _) => (n, true),
+    };
+    // The box corner farthest along the normal: nothing when it lies behind the plane.
+    let far = Vec3::new(
+        if n.x > 0.0 { hi.x } else { lo.x },
+        if n.y > 0.0 { hi.y } else { lo.y },
+        if n.z > 0.0 { hi.z } else { lo.z },
+    );
+    let reach = n.dot(far - x);
+    if !both && reach <= 0.0 {
+        return 0.0;
+    }
     let d2 = (x.clamp(lo, hi) - x).length_squared();
-    // Close by (within its radius), the form factor of its box: exact for a flat cluster
-    // (a floor's tiles), at worst too large for a volume; a box around `x`, a hemisphere.
+    // Close by (within its radius): a polygon's exact form factor, a cluster's box's (exact
+    // for a flat cluster such as a floor's tiles, at worst too large for a volume; a box
+    // around `x`, a hemisphere).
     if d2 < 0.25 * (hi - lo).length_squared() {
-        let (n, both) = match plane {
-            Plane::Facing(n) | Plane::Sides(n, 1) => (n, false),
-            Plane::Sides(n, _) => (n, true),
-        };
+        if polygon {
+            return polygon_value(st, ws, e, x, plane).map_or(0.0, |(v, _, _)| v);
+        }
         if !outside(x, lo, hi) {
             return if both { 2.0 } else { 1.0 };
         }
@@ -413,22 +436,13 @@ fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, plane: Plane) -> f32 {
         }
         return f;
     }
-    let mut cos = 1.0f32;
-    if let Some(nr) = nr {
-        // The box corner farthest along the normal.
-        let far = Vec3::new(
-            if nr.x > 0.0 { hi.x } else { lo.x },
-            if nr.y > 0.0 { hi.y } else { lo.y },
-            if nr.z > 0.0 { hi.z } else { lo.z },
-        );
-        let reach = nr.dot(far - x);
-        if reach <= 0.0 {
-            return 0.0;
-        }
-        if d2 > 0.0 {
-            cos = (reach / libm::sqrtf(d2)).min(1.0);
-        }
-    }
+    // Farther: its area times a bound on the cosine at `x` over pi times the squared
+    // distance to its box, at most a hemisphere.
+    let cos = if both {
+        1.0
+    } else {
+        (reach / libm::sqrtf(d2)).min(1.0)
+    };
     (a * cos / (PI * d2).max(f32::MIN_POSITIVE)).min(1.0)
 }
 
