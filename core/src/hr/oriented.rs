@@ -413,9 +413,10 @@ fn summarize(st: &State, ws: &mut [u8], select: bool) {
         for (k, b) in beams.iter().enumerate() {
             sum[k] = f32::from_bits(*b);
         }
-        // The rest's scale: kept with the beams, chosen anew with them.
+        // The rest's scale: kept with the beams, chosen anew with them (by `distribute`,
+        // once every cluster has its beams).
         sum[len - 1] = if select {
-            super::rest_scale::rest_scale(st, ws, c_index, &beams)
+            0.0
         } else {
             st.summary(ws, c_index)[len - 1]
         };
@@ -433,9 +434,35 @@ pub(crate) fn distribute<E: Executor>(
     select: bool,
 ) {
     summarize(st, ws, select);
-    let n = st.polygons as usize;
     let nb = st.bands;
     let mut ctx = Ctx { st, ws };
+    if select {
+        let clusters = ctx.st.clusters as usize;
+        let len = summary_floats(nb);
+        run_chunks(
+            ex,
+            &mut ctx,
+            clusters.div_ceil(CHUNK),
+            CHUNK,
+            |c: &Ctx<'_>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(clusters)).enumerate() {
+                    let sum = c.st.summary(c.ws, i as u32);
+                    let mut beams = [NONE; BEAMS];
+                    for (b, v) in beams.iter_mut().zip(&sum[..BEAMS]) {
+                        *b = v.to_bits();
+                    }
+                    buf[slot] = super::rest_scale::rest_scale(c.st, c.ws, i as u32, &beams);
+                }
+            },
+            |c: &mut Ctx<'_>, chunk, buf| {
+                for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(clusters)).enumerate() {
+                    c.st.summary_mut(c.ws, i as u32)[len - 1] = buf[slot];
+                }
+            },
+            &mut |_, _| {},
+        );
+    }
+    let n = ctx.st.polygons as usize;
     run_chunks(
         ex,
         &mut ctx,

@@ -19,14 +19,37 @@ use glam::Vec3;
 /// another, but not without limit (a merged cone nearly edge-on to every polygon).
 const SCALE: (f32, f32) = (0.1, 10.0);
 
+/// Most polygons a cluster holds as its own children that the scale is computed for.
+const OWN: usize = 64;
+
 /// The scale of cluster `c`'s merged rest, given the beams it keeps apart (1 when it has no
 /// polygons of its own or the rest is empty).
 pub(crate) fn rest_scale(st: &State, ws: &[u8], c: u32, beams: &[u32]) -> f32 {
     let cluster = st.cluster(ws, c);
-    let own = cluster.child_count;
-    if (0..own).all(|k| st.child(ws, cluster.children + k).kind() == Kind::Cluster) {
+    // Its own polygons (normal, area, sides), read once.
+    let mut own = [(Vec3::ZERO, 0.0f32, false); OWN];
+    let mut count = 0;
+    for k in 0..cluster.child_count {
+        let e = st.child(ws, cluster.children + k);
+        if e.kind() == Kind::Cluster {
+            continue;
+        }
+        if count == OWN {
+            // More than a cluster holds in practice: leave its rest as it is.
+            return 1.0;
+        }
+        let p = st.patch(ws, e);
+        own[count] = (
+            Vec3::from(st.polygon(ws, p.poly).normal),
+            p.area,
+            State::sides(Elem(e.0)) == 2,
+        );
+        count += 1;
+    }
+    if count == 0 {
         return 1.0;
     }
+    let own = &own[..count];
     let (mut apart, mut weight, mut dir) = (0.0f32, 0.0f32, Vec3::ZERO);
     let mut at = c;
     // The rest: every link of the cluster and its ancestors that is not a beam.
@@ -44,7 +67,7 @@ pub(crate) fn rest_scale(st: &State, ws: &[u8], c: u32, beams: &[u32]) -> f32 {
                 continue;
             }
             let d = Vec3::from(l.dir);
-            apart += w * taken(st, ws, cluster, d);
+            apart += w * taken(own, d);
             weight += w;
             dir += d * w;
         }
@@ -56,7 +79,7 @@ pub(crate) fn rest_scale(st: &State, ws: &[u8], c: u32, beams: &[u32]) -> f32 {
     if !(weight > 0.0 && apart > 0.0) {
         return 1.0;
     }
-    let merged = weight * taken(st, ws, cluster, dir / weight);
+    let merged = weight * taken(own, dir / weight);
     if merged > 0.0 {
         (apart / merged).clamp(SCALE.0, SCALE.1)
     } else {
@@ -64,29 +87,24 @@ pub(crate) fn rest_scale(st: &State, ws: &[u8], c: u32, beams: &[u32]) -> f32 {
     }
 }
 
-/// What the polygons that are the cluster's own children take of a cone of unit flux
-/// density with `dir`'s axis and collimation (m^2), on every side they have, as
+/// What a cluster's own polygons (`own`: normal, area, two-sided) take of a cone of unit
+/// flux density with `dir`'s axis and collimation (m^2), on every side they have, as
 /// `oriented::share` hands it out.
-fn taken(st: &State, ws: &[u8], c: super::records::Cluster, dir: Vec3) -> f32 {
+fn taken(own: &[(Vec3, f32, bool)], dir: Vec3) -> f32 {
     let collimation = dir.length().min(1.0);
+    let axis = if collimation > 0.0 {
+        dir / dir.length()
+    } else {
+        Vec3::ZERO
+    };
     let mut sum = 0.0f32;
-    for k in 0..c.child_count {
-        let e = st.child(ws, c.children + k);
-        if e.kind() == Kind::Cluster {
-            continue;
-        }
-        let p = st.patch(ws, e);
-        let normal = Vec3::from(st.polygon(ws, p.poly).normal);
-        let t = if collimation > 0.0 {
-            normal.dot(dir) / dir.length()
-        } else {
-            0.0
-        };
+    for &(normal, area, two) in own {
+        let t = normal.dot(axis);
         let mut share = cone_share(collimation, t);
-        if State::sides(Elem(e.0)) == 2 {
+        if two {
             share += cone_share(collimation, -t);
         }
-        sum += p.area * share;
+        sum += area * share;
     }
     sum
 }
