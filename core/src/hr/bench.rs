@@ -269,7 +269,7 @@ pub fn each_link(
     }
 }
 
-/// Slots a link audit needs (`links x bands` for each of [`audit`]'s buffers).
+/// Slots a link audit needs (`links x bands` for each of `audit`'s buffers).
 pub fn link_slots(snap: &Snapshot) -> (usize, usize) {
     (snap.0.links.len as usize, snap.0.bands)
 }

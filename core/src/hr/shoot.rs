@@ -9,8 +9,9 @@
 //! estimate is a hit-or-miss fraction, bounded and well behaved when the receiver fills much
 //! of the emitter's view.
 
-use super::cluster_kernel::Witnesses;
+use super::cluster_kernel::{Witnesses, shared_area};
 use super::direct::cosine_direction;
+use super::eval::Coefficients;
 use super::ids::{Elem, Kind};
 use super::sample::{area, point_in};
 use super::state::State;
@@ -18,6 +19,73 @@ use crate::limits::NONE;
 use crate::sampling::{hash3, unit2};
 use crate::visibility::Visibility;
 use glam::Vec3;
+
+/// Fraction of an emitter's view that a receiving cluster's box must fill for its link to
+/// be shot from the emitter ([`shoot`]) rather than gathered at points of the receiver.
+const SHOOT_SHARE: f32 = 0.25;
+
+/// The same for an emitter smaller than its receiver.
+const SHOOT_SHARE_SMALL: f32 = 0.05;
+
+/// The coefficients that link `recv <- emit` carries, shot from the emitter ([`shoot`]),
+/// or `None` when it is not shot. Links from a cluster, or from a patch into a cluster, are
+/// shot when the receiver's box fills much of the emitter's view (judged apart from the
+/// shots themselves, so that the choice does not bias them). The decisions still come from
+/// samples of the receiver (how its light varies, see `eval::evaluate`).
+pub(crate) fn shot<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    emit: Elem,
+    seed: u32,
+    rays: u32,
+    vis: &V,
+) -> Option<Coefficients> {
+    use super::ids::Kind;
+    let patch_emitter = !matches!(emit.kind(), Kind::Cluster | Kind::Source);
+    if emit.kind() == Kind::Source || (patch_emitter && recv.kind() != Kind::Cluster) {
+        return None;
+    }
+    // A cluster smaller than the patch it lights is shot even when it sees little of it:
+    // the patch's few fixed points miss where its light peaks (a wall beside a chair), and
+    // shots that miss the patch's box cost no ray. Not into a cluster: a sparse one (leaves
+    // at a distance) is met by a few of the shots that enter its box, or none.
+    let smaller = recv.kind() != Kind::Cluster
+        && super::sample::area(st, ws, emit) < super::sample::area(st, ws, recv);
+    let least = if smaller {
+        SHOOT_SHARE_SMALL
+    } else {
+        SHOOT_SHARE
+    };
+    if box_share(st, ws, recv, emit, hash3(seed, 0xB0C5, 2), 32) < least {
+        return None;
+    }
+    let n = (4 * rays * rays).max(16);
+    let shot = shoot(st, ws, recv, emit, hash3(seed, 0x5407, 1), n, vis);
+    let mut out = Coefficients {
+        exact: true,
+        rays: n,
+        dir: shot.dir,
+        ..Coefficients::default()
+    };
+    if recv.kind() == Kind::Cluster {
+        let taken = shared_area(st, ws, recv.index(), shot.dir);
+        if taken > 0.0 {
+            out.k[0] = [shot.power[0][0] / taken, shot.power[0][1] / taken];
+        }
+        out.witness = shot.wit[0].pick;
+    } else {
+        let area = st.patch(ws, recv).area;
+        if area > 0.0 {
+            for (k, p) in out.k.iter_mut().zip(shot.power) {
+                *k = [p[0] / area, p[1] / area];
+            }
+        }
+        let r = st.shape(ws, recv);
+        out.witness = super::eval::witnesses(&r, &shot.wit);
+    }
+    Some(out)
+}
 
 /// What the shots of one link found: the power the receiver takes per unit radiosity of
 /// the emitter, by receiving side (a cluster's all in side 0) and emitting side (a cluster
