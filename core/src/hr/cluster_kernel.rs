@@ -394,11 +394,7 @@ fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, plane: Plane) -> f32 {
         Kind::Source => return 0.0,
         _ => {
             let p = st.patch(ws, e);
-            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            for c in &p.corners[..p.corner_count()] {
-                lo = lo.min(Vec3::from(*c));
-                hi = hi.max(Vec3::from(*c));
-            }
+            let (lo, hi) = p.bounds();
             (lo, hi, p.area, true)
         }
     };

@@ -44,6 +44,16 @@ impl Patch {
         (self.shape >> 8) & 0xFF
     }
 
+    /// Its box (m): the smallest and largest of its corners' coordinates.
+    pub(crate) fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
+        let (mut lo, mut hi) = (glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY);
+        for c in &self.corners[..self.corner_count()] {
+            lo = lo.min(glam::Vec3::from(*c));
+            hi = hi.max(glam::Vec3::from(*c));
+        }
+        (lo, hi)
+    }
+
     /// True when the links this patch receives changed since its sub-patches' closure
     /// factors were computed (or it is new).
     pub(crate) fn stale(&self) -> bool {

@@ -41,7 +41,6 @@ pub(crate) fn shot<V: Visibility + ?Sized>(
     rays: u32,
     vis: &V,
 ) -> Option<Coefficients> {
-    use super::ids::Kind;
     let patch_emitter = !matches!(emit.kind(), Kind::Cluster | Kind::Source);
     if emit.kind() == Kind::Source || (patch_emitter && recv.kind() != Kind::Cluster) {
         return None;
@@ -104,13 +103,7 @@ fn bounds(st: &State, ws: &[u8], recv: Elem) -> (Vec3, Vec3) {
         let c = st.cluster(ws, recv.index());
         return (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max));
     }
-    let p = st.patch(ws, recv);
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for c in &p.corners[..p.corner_count()] {
-        lo = lo.min(Vec3::from(*c));
-        hi = hi.max(Vec3::from(*c));
-    }
-    (lo, hi)
+    st.patch(ws, recv).bounds()
 }
 
 /// The fraction of `n` cosine-distributed directions from points of `emit` that enter the
