@@ -394,6 +394,7 @@ fn add_root_patch(
         closure: [0.0; 2],
         exposed: 1.0,
         shadow: 0.0,
+        gather: [0; 2],
     };
     s.set_patch(ws, e, &p);
     for side in 0..State::sides(e) {

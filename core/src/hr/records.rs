@@ -34,6 +34,10 @@ pub(crate) struct Patch {
     /// the direct light that falls on its lit part, times the lit fraction's distance from
     /// uniform); drives subdivision at shadow edges.
     pub shadow: f32,
+    /// Per receiving side, the share of its light that the final gather recomputes, noted
+    /// from the hierarchy's solution before the gather changes it (see
+    /// `final_gather::note_shares`): 0 not noted, else `1 + share x 65534`.
+    pub gather: [u16; 2],
 }
 
 impl Patch {

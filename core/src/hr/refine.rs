@@ -363,6 +363,7 @@ fn subdivide_patch(st: &mut State, ws: &mut [u8], e: Elem, p: &Patch, pool: usiz
             closure: [0.0; 2],
             exposed: p.exposed,
             shadow: 0.0,
+            gather: [0; 2],
         };
         st.set_patch(ws, child, &rec);
         for (side, pb) in parent_b.iter().enumerate().take(sides) {
