@@ -79,7 +79,13 @@ fn main() {
         let t = traced[i as usize * nb + band];
         tc += c;
         tt += t;
+        // SOIL_AREA=a: clusters whose polygons average a (m^2), the soil tiles of a canopy.
+        let soil: f32 = std::env::var("SOIL_AREA")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(-1.0);
         let kind = |x: &bench::ElemInfo| match x.kind {
+            0 if (x.area / x.polygons.max(1) as f32 - soil).abs() < 1e-4 => "cl_soil".to_string(),
             0 if x.polygons <= 32 => "cl_small".to_string(),
             0 => "cl_large".to_string(),
             3 => "source".to_string(),
