@@ -68,6 +68,11 @@ fn main() {
         "links into clusters carry {into_clusters:.4}, their polygons take {dist:.4} ({:+.2}%)",
         100.0 * (dist - into_clusters) / into_clusters
     );
+    // SOIL_AREA=a: clusters whose polygons average a (m^2), the soil tiles of a canopy.
+    let soil: f32 = std::env::var("SOIL_AREA")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(-1.0);
     let mut groups: BTreeMap<String, (u64, f64, f64, f64)> = BTreeMap::new();
     let mut worst: Vec<(f64, u32)> = Vec::new();
     let (mut tc, mut tt) = (0.0, 0.0);
@@ -79,11 +84,6 @@ fn main() {
         let t = traced[i as usize * nb + band];
         tc += c;
         tt += t;
-        // SOIL_AREA=a: clusters whose polygons average a (m^2), the soil tiles of a canopy.
-        let soil: f32 = std::env::var("SOIL_AREA")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(-1.0);
         let kind = |x: &bench::ElemInfo| match x.kind {
             0 if (x.area / x.polygons.max(1) as f32 - soil).abs() < 1e-4 => "cl_soil".to_string(),
             0 if x.polygons <= 32 => "cl_small".to_string(),

@@ -532,38 +532,55 @@ fn furnished_rooms_keep_their_light_with_the_hierarchy_alone() {
             ..Settings::default()
         };
         let (_, run) = solve_with(&s, &settings);
-        for b in 0..s.band_names.len() {
-            let imbalance = run.stats.balance.relative_imbalance(b);
-            assert!(
-                imbalance.abs() < 0.025,
-                "{extra:?}, band {b}: imbalance {:+.2}%",
-                100.0 * imbalance
-            );
-        }
+        assert_balanced(&s, &run, 0.025, &format!("{extra:?}"));
+    }
+}
+
+/// Every band of `run` (a solve of `s`) within `limit` (a fraction of what enters) of the
+/// power balance.
+fn assert_balanced(s: &Scene, run: &HrRun, limit: f64, what: &str) {
+    for b in 0..s.band_names.len() {
+        let imbalance = run.stats.balance.relative_imbalance(b);
+        assert!(
+            imbalance.abs() < limit,
+            "{what}, band {b}: imbalance {:+.2}%",
+            100.0 * imbalance
+        );
     }
 }
 
 #[test]
 fn the_final_gathers_passes_keep_a_canopys_light_at_any_ray_count() {
     // Each pass of the gather took its ray counts from the previous pass's own estimate: a
-    // leaf side whose few rays all escaped got none in the next pass and kept its zero. A
-    // 2 x 3 maize canopy lost 1.1% to 1.5% of its NIR at 4 to 36 rays per side and 2 or 3
-    // passes that way (measured on 2026-12-03: now -0.34% to +0.01%).
-    let s = canopy_scene(&["--rows", "2", "--plants-per-row", "3"]);
-    for (rays, passes) in [(4, 2), (9, 3), (16, 2), (16, 4), (36, 3)] {
-        let settings = Settings {
-            final_rays: rays,
-            final_passes: passes,
-            ..Settings::default()
-        };
-        let (_, run) = solve_with(&s, &settings);
-        for b in 0..s.band_names.len() {
-            let imbalance = run.stats.balance.relative_imbalance(b);
-            assert!(
-                imbalance.abs() < 0.005,
-                "{rays} rays, {passes} passes, band {b}: imbalance {:+.2}%",
-                100.0 * imbalance
-            );
+    // leaf side whose few rays all escaped got none in the next pass and kept its zero.
+    // Measured on 2026-12-03 (NIR, + lost), before -> after: 2 x 3 canopy +1.14 -> -0.31%
+    // (4 rays, 2 passes), +1.49 -> -0.05% (9, 3), +1.15 -> -0.07% (16, 2), +1.30 -> -0.08%
+    // (16, 4), +1.01 -> -0.31% (36, 3); 3 x 2 canopy of seed 2 +0.94 -> -0.30% (16, 2),
+    // +0.86 -> -0.33% (36, 3). At 4 rays the small canopies' balance is noisy (seed 2:
+    // -0.76% after), so the other canopy is held from 16 rays up.
+    // (generator words, (rays per side, passes) to run)
+    type Case<'a> = (&'a [&'a str], &'a [(u32, u32)]);
+    let cases: [Case; 2] = [
+        (
+            &["--rows", "2", "--plants-per-row", "3"],
+            &[(4, 2), (9, 3), (16, 2), (16, 4), (36, 3)],
+        ),
+        (
+            &["--rows", "3", "--plants-per-row", "2", "--seed", "2"],
+            &[(16, 2), (36, 3)],
+        ),
+    ];
+    for (extra, runs) in cases {
+        let s = canopy_scene(extra);
+        for &(rays, passes) in runs {
+            let settings = Settings {
+                final_rays: rays,
+                final_passes: passes,
+                ..Settings::default()
+            };
+            let (_, run) = solve_with(&s, &settings);
+            let what = format!("{extra:?}, {rays} rays, {passes} passes");
+            assert_balanced(&s, &run, 0.005, &what);
         }
     }
 }

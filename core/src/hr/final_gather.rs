@@ -18,6 +18,7 @@
 
 use super::direct::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
 use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::gather_rays::{adaptive_rays, gathered_share, rays_per_side};
 use super::ids::{Elem, Kind};
 use super::layout::CHUNK;
 use super::state::State;
@@ -31,15 +32,6 @@ use glam::Vec3;
 /// Emitting polygons up to which each leaf weighs every one of them; with more, each sample
 /// draws one down the cluster tree (see `emitter_tree`).
 pub(crate) const MAX_DIRECT_EMITTERS: usize = 64;
-
-/// Rays for the whole scene when the count per side is chosen automatically, at epsilon
-/// 1e-3 (it grows as 1 / epsilon: a finer solution asks for less noise).
-const AUTO_BUDGET: f64 = 1_048_576.0;
-/// Most rays per receiving side when chosen automatically, at epsilon 1e-5 (again as
-/// 1 / epsilon, at most [`AUTO_MAX`]), and the fewest.
-const AUTO_CAP: f64 = 65_536.0;
-const AUTO_MAX: u32 = 262_144;
-const AUTO_MIN: u32 = 64;
 
 /// The emitting polygons whose light is added directly, each weighed by every leaf, or none
 /// when there are more than [`MAX_DIRECT_EMITTERS`] (then `count` is 0, `direct` false and
@@ -85,124 +77,6 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
     }
     out
 }
-
-/// Rays per receiving side: the setting, or (for [`super::Settings::AUTO`]) a budget of
-/// [`AUTO_BUDGET`] x (1e-3 / epsilon) rays spread over all receiving sides, at least
-/// [`AUTO_MIN`] and at most [`AUTO_CAP`] x (1e-5 / epsilon) per side. Rounded to a square
-/// (points and directions are both stratified on a grid).
-pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
-    let asked = st.settings.final_rays;
-    if asked == 0 {
-        return 0;
-    }
-    let n = if asked == super::Settings::AUTO {
-        let mut sides = 0u64;
-        for i in 0..st.polygons {
-            sides += State::sides(Elem(st.polygon(ws, i).root)) as u64;
-        }
-        let eps = st.settings.epsilon as f64;
-        let budget = AUTO_BUDGET * (1e-3 / eps);
-        let cap = (AUTO_CAP * (1e-5 / eps)).clamp(AUTO_MIN as f64, AUTO_MAX as f64);
-        (budget / sides.max(1) as f64).clamp(AUTO_MIN as f64, cap) as u32
-    } else {
-        asked
-    };
-    let g = libm::roundf(libm::sqrtf(n as f32)).max(1.0) as u32;
-    g * g
-}
-
-/// The share of a receiving side's light that the gather recomputes: what the hierarchy's
-/// links bring it over all it gets, links and the direct light of suns and sky, the largest
-/// over bands, for leaf patches `leaves` of one polygon (their exposed-area mean). 0 when
-/// the links bring nothing: then no surface the side can see reflects or emits. Read as
-/// noted before the gather began ([`note_shares`]) where it was: a pass of the gather
-/// replaces the links' light by its own estimate, and a count drawn from that estimate
-/// would follow its noise (a side whose 16 rays all escaped in one pass got none in the
-/// next, and kept its zero: a canopy lost 0.9% of its light that way).
-fn gathered_share(st: &State, ws: &[u8], leaves: impl Iterator<Item = Elem>, side: usize) -> f32 {
-    let (mut sum, mut area) = (0.0f64, 0.0f64);
-    for e in leaves {
-        let p = st.patch(ws, e);
-        let a = (p.area * p.exposed) as f64;
-        let s = match p.gather[side.min(1)] {
-            0 => live_share(st, ws, e, side),
-            q => (q - 1) as f32 / SHARE_STEPS,
-        };
-        sum += a * s as f64;
-        area += a;
-    }
-    if area > 0.0 {
-        (sum / area).clamp(0.0, 1.0) as f32
-    } else {
-        0.0
-    }
-}
-
-/// Steps of a noted share (see `Patch::gather`).
-const SHARE_STEPS: f32 = 65_534.0;
-
-/// A leaf patch side's share (see [`gathered_share`]) from its irradiance as it stands.
-fn live_share(st: &State, ws: &[u8], e: Elem, side: usize) -> f32 {
-    let nb = st.bands;
-    let mut h = [0.0f32; 8];
-    super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
-    let d = st.direct(ws, e, side);
-    let mut share = 0.0f32;
-    for k in 0..nb {
-        let dk = d.map_or(0.0, |d| d[k]);
-        let all = h[k].max(dk);
-        if all > 0.0 {
-            share = share.max((h[k] - dk).max(0.0) / all);
-        }
-    }
-    share.clamp(0.0, 1.0)
-}
-
-/// Notes every leaf patch's share (see [`gathered_share`]) from the hierarchy's solution,
-/// before any pass of the gather replaces its links' light. A share that is not 0 is noted
-/// as at least one step, so that a side that gathers anything keeps gathering.
-pub(crate) fn note_shares(st: &State, ws: &mut [u8]) {
-    for kind in [Kind::Patch1, Kind::Patch2] {
-        for i in 0..st.pool(kind).len {
-            let e = Elem::new(kind, i);
-            let mut p = st.patch(ws, e);
-            if p.first_child != NONE {
-                continue;
-            }
-            for side in 0..State::sides(e) {
-                let s = live_share(st, ws, e, side);
-                let q = if s > 0.0 {
-                    libm::ceilf(s * SHARE_STEPS).clamp(1.0, SHARE_STEPS)
-                } else {
-                    0.0
-                };
-                p.gather[side] = 1 + q as u16;
-            }
-            st.set_patch(ws, e, &p);
-        }
-    }
-}
-
-/// Rays for a receiving side of which the gather recomputes the share `share` of the light
-/// (see [`gathered_share`]), out of `full` for a side it recomputes wholly: `full x
-/// sqrt(share)`. The gather's noise on the side's total is its noise on that share times
-/// the share, so `full x share^2` would keep every side's relative noise equal; the square
-/// root spends more, because the share itself comes from the hierarchy's estimate (a law
-/// linear in the share left a two-sided leaf inside a cluster 5% off, the square root 1.5%).
-/// A sunlit leaf whose light is nine tenths sun still casts a third of the rays of a shaded
-/// one. At least [`MIN_RAYS`] while anything is to be gathered, none when the links bring
-/// nothing (a scene whose surfaces neither reflect nor emit). The count depends only on the
-/// hierarchy's solution, never on the gather's own samples, so it biases nothing.
-fn adaptive_rays(full: u32, share: f32) -> u32 {
-    if full == 0 || share.is_nan() || share <= 0.0 {
-        return 0;
-    }
-    let n = libm::ceilf(full as f32 * libm::sqrtf(share)) as u32;
-    n.clamp(MIN_RAYS.min(full), full)
-}
-
-/// The fewest rays a receiving side that gathers anything casts.
-const MIN_RAYS: u32 = 4;
 
 /// Gathers polygon `poly`'s irradiance (W/m^2, per side and band, the mean over its whole
 /// area) into `out[side * bands + band]`, without the direct light of suns and sky. Returns

@@ -28,6 +28,7 @@ mod error;
 mod eval;
 mod exec;
 mod final_gather;
+mod gather_rays;
 mod ids;
 mod layout;
 mod load;
@@ -550,8 +551,8 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
         st.stats.emitted_power = st.power;
-        if final_gather::rays_per_side(st, ws) > 0 {
-            final_gather::note_shares(st, ws);
+        if gather_rays::rays_per_side(st, ws) > 0 {
+            gather_rays::note_shares(st, ws);
         }
         for _ in 1..st.settings.final_passes {
             st.stats.rays += final_gather::relight(st, ws, &self.vis, &mut self.seq, progress);

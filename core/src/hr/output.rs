@@ -4,7 +4,8 @@
 //! and its radiosity follows from its material.
 
 use super::exec::{Executor, Fallback, Progress, run_chunks};
-use super::final_gather::{Emitters, emitters, polygon as gather_polygon, rays_per_side};
+use super::final_gather::{Emitters, emitters, polygon as gather_polygon};
+use super::gather_rays::rays_per_side;
 use super::ids::Elem;
 use super::layout::CHUNK;
 use super::state::State;

@@ -36,7 +36,7 @@ pub(crate) struct Patch {
     pub shadow: f32,
     /// Per receiving side, the share of its light that the final gather recomputes, noted
     /// from the hierarchy's solution before the gather changes it (see
-    /// `final_gather::note_shares`): 0 not noted, else `1 + share x 65534`.
+    /// `gather_rays::note_shares`): 0 not noted, else `1 + share x 65534`.
     pub gather: [u16; 2],
 }
 
