@@ -584,3 +584,64 @@ fn the_final_gathers_passes_keep_a_canopys_light_at_any_ray_count() {
         }
     }
 }
+
+#[test]
+fn more_gather_passes_bring_a_room_nearer_its_balance() {
+    // Every relighting pass cast the same rays, so the passes iterated one sampled transport
+    // towards its fixed point, whose inverse turns the samples' errors into light no lamp
+    // sent. Measured on 2026-12-03, the small room below at 16 rays per side (red, - made):
+    // 1 pass -1.37%, 2 passes -2.04%, 4 passes -3.17% with the same samples in every pass;
+    // 4 passes +0.06% (green +0.44%, blue +0.78%) with each pass's own. With the passes'
+    // number automatic (the default) the room, whose hierarchy alone makes 1.8% of its
+    // light, relights until a pass moves its light by less than 0.5% or the fourth pass:
+    // 2 passes -1.95%, automatic (4) -1.23%.
+    let s = room_scene(&[
+        "--chairs",
+        "8",
+        "--tables",
+        "1",
+        "--orchids",
+        "1",
+        "--plants",
+        "1",
+        "--length",
+        "6",
+        "--width",
+        "5",
+    ]);
+    let run_with = |rays: u32, passes: u32| {
+        let settings = Settings {
+            final_rays: rays,
+            final_passes: passes,
+            ..Settings::default()
+        };
+        solve_with(&s, &settings).1
+    };
+    let four = run_with(16, 4);
+    assert_eq!(four.stats.final_passes, 4);
+    assert_balanced(&s, &four, 0.01, "small room, 16 rays, 4 passes");
+    let worst = |run: &HrRun| {
+        (0..s.band_names.len())
+            .map(|b| run.stats.balance.relative_imbalance(b).abs())
+            .fold(0.0f64, f64::max)
+    };
+    let two = run_with(Settings::AUTO, 2);
+    let auto = run_with(Settings::AUTO, Settings::AUTO);
+    assert!(
+        auto.stats.final_passes > 2,
+        "automatic passes stopped at {} with the last moving {:.2}%",
+        auto.stats.final_passes,
+        100.0 * auto.stats.final_change
+    );
+    assert!(
+        auto.stats.final_passes == 4 || auto.stats.final_change < 0.005,
+        "{:?}",
+        auto.stats
+    );
+    assert!(
+        worst(&auto) < worst(&two),
+        "automatic passes {:.2}% against two passes {:.2}%",
+        100.0 * worst(&auto),
+        100.0 * worst(&two)
+    );
+}

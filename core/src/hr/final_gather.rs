@@ -24,7 +24,7 @@ use super::layout::CHUNK;
 use super::state::State;
 use super::vis::{Ray, Vis, WsPolygons};
 use crate::formfactor::{facing_side, point_polygon};
-use crate::limits::NONE;
+use crate::limits::{MAX_BANDS, NONE};
 use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
 use crate::visibility::Visibility;
 use glam::Vec3;
@@ -472,12 +472,66 @@ pub(crate) fn leaf_at(st: &State, ws: &[u8], root: Elem, y: Vec3, n: Vec3) -> El
     }
 }
 
+/// A relighting pass that moves the light leaving the surfaces by less than this fraction of
+/// what enters ends the passes when their number is automatic: the power balance after the
+/// polygons' gather measures about the next pass's move, which is smaller again (a 20 x 60
+/// maize canopy's NIR moved 1.0%, 0.6%, 0.4% in its second to fourth passes).
+pub(crate) const SETTLED: f32 = 0.005;
+
+/// The light leaving every exposed leaf side and what enters the scene (emitted, and the
+/// direct light of suns and sky on the receiving sides), per band (W).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Leaving {
+    out: [f64; MAX_BANDS],
+    input: [f64; MAX_BANDS],
+}
+
+impl Leaving {
+    /// The largest change of any band's leaving light from `before`, relative to what enters.
+    pub(crate) fn change_from(&self, before: &Leaving, bands: usize) -> f32 {
+        let mut worst = 0.0f64;
+        for b in 0..bands {
+            if self.input[b] > 0.0 {
+                worst = worst.max((self.out[b] - before.out[b]).abs() / self.input[b]);
+            }
+        }
+        worst as f32
+    }
+}
+
+/// Sums [`Leaving`] over the leaf patches as the solution stands.
+pub(crate) fn leaving_power(st: &State, ws: &[u8]) -> Leaving {
+    let nb = st.bands;
+    let mut sum = Leaving::default();
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        for i in 0..st.pool(kind).len {
+            let e = Elem::new(kind, i);
+            let p = st.patch(ws, e);
+            if p.first_child != NONE {
+                continue;
+            }
+            let seen = (p.area * p.exposed) as f64;
+            let m = st.material(ws, st.polygon(ws, p.poly).material);
+            for side in 0..State::sides(e) {
+                let b = st.b(ws, e, side);
+                let d = st.direct(ws, e, side);
+                for k in 0..nb {
+                    sum.out[k] += seen * b.map_or(0.0, |b| b[k]) as f64;
+                    sum.input[k] += seen * (m.emit[side][k] + d.map_or(0.0, |d| d[k])) as f64;
+                }
+            }
+        }
+    }
+    sum
+}
+
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a mut State,
     ws: &'a mut [u8],
     vis: &'a Vis<'v, V>,
     em: Emitters,
     rays: u32,
+    pass: u32,
 }
 
 /// One pass of the gather over every leaf patch before the polygons' own: each leaf's
@@ -485,13 +539,17 @@ struct Ctx<'a, 'v, V: ?Sized> {
 /// radiosities follow from the materials and are averaged up the hierarchy. What a leaf
 /// shows others then carries its own visibility, not its links' average, so the final
 /// gather reads better radiosities (a Jacobi step with exact visibility; the links' error
-/// shrinks by about the reflectance). Returns the rays cast.
+/// shrinks by about the reflectance). Pass `pass` (from 0) draws samples of its own: passes
+/// that cast the same rays iterate one sampled transport to its fixed point, whose inverse
+/// amplifies the samples' errors into light that no emitter sent (a room at 64 rays made
+/// 1.5% more light with four passes than with two). Returns the rays cast.
 pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
     st: &mut State,
     ws: &mut [u8],
     vis: &Vis<'_, V>,
     ex: &mut Fallback<'_, E>,
     progress: &mut dyn Progress,
+    pass: u32,
 ) -> u64 {
     let full = rays_per_side(st, ws);
     if full == 0 {
@@ -515,6 +573,7 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
             vis,
             em,
             rays,
+            pass,
         };
         run_chunks(
             ex,
@@ -560,7 +619,7 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
                         }
                         let g = leaf_grid(side_rays, p.area, total);
                         let nrm = if side == 0 { normal } else { -normal };
-                        let seed = hash3(e.0, side as u32, 0x4E11);
+                        let seed = hash3(e.0, side as u32 | c.pass << 1, 0x4E11);
                         let mut h = [0.0f64; 8];
                         cast += leaf(
                             c.st,

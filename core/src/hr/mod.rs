@@ -80,14 +80,19 @@ pub struct Settings {
     /// 1e3 / epsilon rays over the scene (a million at the default epsilon), at least 64 and
     /// at most 0.65 / epsilon per side. Rounded to a square.
     pub final_rays: u32,
-    /// Final gather passes (1..=4): with more than one, every leaf patch first gathers its
-    /// own light that many times less one (with as many rays as the polygons' gather), and
-    /// the polygons' gather reads those radiosities.
+    /// Final gather passes (1..=4, or [`Settings::AUTO`]): with more than one, every leaf
+    /// patch first gathers its own light that many times less one (with as many rays as the
+    /// polygons' gather), and the polygons' gather reads those radiosities. `AUTO` relights
+    /// at least once and goes on (up to 4 passes in all) while a pass still moves the light
+    /// leaving the surfaces by more than [`final_gather::SETTLED`] of what enters.
     pub final_passes: u32,
 }
 
+/// Most final gather passes.
+pub const MAX_FINAL_PASSES: u32 = 4;
+
 impl Settings {
-    /// [`Settings::final_rays`] chosen from the scene's size.
+    /// [`Settings::final_rays`] or [`Settings::final_passes`] chosen from the scene.
     pub const AUTO: u32 = u32::MAX;
     /// Most final gather rays per side one may ask for.
     pub const MAX_FINAL_RAYS: u32 = 1 << 20;
@@ -112,8 +117,10 @@ impl Settings {
         if !(2..=16).contains(&self.max_children) {
             return Err(HrError::Settings("max_children must lie in 2..=16"));
         }
-        if !(1..=4).contains(&self.final_passes) {
-            return Err(HrError::Settings("final_passes must lie in 1..=4"));
+        if !(1..=MAX_FINAL_PASSES).contains(&self.final_passes) && self.final_passes != Self::AUTO {
+            return Err(HrError::Settings(
+                "final_passes must lie in 1..=4 (or be Settings::AUTO)",
+            ));
         }
         if self.final_rays > Self::MAX_FINAL_RAYS && self.final_rays != Self::AUTO {
             return Err(HrError::Settings(
@@ -136,7 +143,7 @@ impl Default for Settings {
             max_rounds: 24,
             max_children: 8,
             final_rays: Settings::AUTO,
-            final_passes: 2,
+            final_passes: Settings::AUTO,
         }
     }
 }
@@ -186,6 +193,11 @@ pub struct Stats {
     pub diverged: bool,
     /// Where the power went, per band.
     pub balance: Balance,
+    /// Final gather passes made, the polygons' own included (0 without the gather).
+    pub final_passes: u32,
+    /// How much the last relighting pass moved the light leaving the surfaces, relative to
+    /// what enters (largest band; 0 with fewer than two passes).
+    pub final_change: f32,
 }
 
 /// What a scene needs, in bytes of workspace.
@@ -553,9 +565,22 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.emitted_power = st.power;
         if gather_rays::rays_per_side(st, ws) > 0 {
             gather_rays::note_shares(st, ws);
-        }
-        for _ in 1..st.settings.final_passes {
-            st.stats.rays += final_gather::relight(st, ws, &self.vis, &mut self.seq, progress);
+            let asked = st.settings.final_passes;
+            let auto = asked == Settings::AUTO;
+            let passes = if auto { MAX_FINAL_PASSES } else { asked };
+            let mut before = final_gather::leaving_power(st, ws);
+            for pass in 1..passes {
+                st.stats.rays +=
+                    final_gather::relight(st, ws, &self.vis, &mut self.seq, progress, pass - 1);
+                let after = final_gather::leaving_power(st, ws);
+                st.stats.final_change = after.change_from(&before, st.bands);
+                st.stats.final_passes = pass;
+                before = after;
+                if auto && st.stats.final_change < final_gather::SETTLED {
+                    break;
+                }
+            }
+            st.stats.final_passes += 1;
         }
         let rays = 4 * st.settings.rays;
         st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);

@@ -90,9 +90,9 @@ pub struct Args {
     #[arg(long, default_value = "auto", value_parser = parse_final_rays)]
     pub final_rays: u32,
     /// Final gather passes (1..=4): with 2 or more every patch gathers its own light first
-    /// (each such pass costs about as much as the polygons' gather).
-    #[arg(long, default_value_t = Settings::default().final_passes,
-          value_parser = clap::value_parser!(u32).range(1..=4))]
+    /// (each such pass costs about as much as the polygons' gather); `auto` relights at least
+    /// once and again while a pass still moves the leaving light by 0.5% of what enters.
+    #[arg(long, default_value = "auto", value_parser = parse_final_passes)]
     pub final_passes: u32,
     /// Smallest patch (hr), as a fraction of the scene's total polygon area.
     #[arg(long, default_value_t = Settings::default().min_area)]
@@ -351,6 +351,9 @@ pub fn run(a: Args) -> Result<()> {
             let s = run.stats;
             report.threads = run.threads as u32;
             report.rays = s.rays;
+            report.final_passes = Some(s.final_passes);
+            report.final_change_percent =
+                Some(100.0 * s.final_change as f64).filter(|_| s.final_passes > 1);
             report.phases = run
                 .phases
                 .iter()
@@ -530,6 +533,19 @@ fn warn_unused(a: &Args) {
 }
 
 /// `--final-rays`: `auto` or a count in 0..=1048576.
+fn parse_final_passes(s: &str) -> Result<u32, String> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(Settings::AUTO);
+    }
+    match s.parse::<u32>() {
+        Ok(n) if (1..=hirad_core::hr::MAX_FINAL_PASSES).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected `auto` or a whole number of passes from 1 to {}",
+            hirad_core::hr::MAX_FINAL_PASSES
+        )),
+    }
+}
+
 fn parse_final_rays(s: &str) -> Result<u32, String> {
     if s.eq_ignore_ascii_case("auto") {
         return Ok(Settings::AUTO);

@@ -106,6 +106,15 @@ pub struct SolveReport {
     /// Rays cast (hr: link visibility, direct light, exposure, power balance, final gather).
     #[serde(default)]
     pub rays: u64,
+    /// Final gather passes made, the polygons' own included (hr; 0 without the gather;
+    /// `null` for the exact solver).
+    #[serde(default)]
+    pub final_passes: Option<u32>,
+    /// How much the gather's last relighting pass moved the light leaving the surfaces, in
+    /// percent of what enters (largest band; `null` with fewer than two passes). The passes
+    /// stop, when their number is automatic, once a pass moves it by less than 0.5%.
+    #[serde(default)]
+    pub final_change_percent: Option<f64>,
 }
 
 impl SolveReport {

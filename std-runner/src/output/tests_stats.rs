@@ -91,6 +91,8 @@ fn json_round_trip_holds_every_field() {
         "power",
         "phases",
         "rays",
+        "final_passes",
+        "final_change_percent",
     ] {
         assert!(
             text.contains(&format!("\"{field}\":")),
