@@ -45,6 +45,8 @@ fn report() -> SolveReport {
             },
         ],
         rays: 123_456,
+        final_passes: Some(3),
+        final_change_percent: Some(0.42),
     }
 }
 
