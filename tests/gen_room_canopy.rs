@@ -243,7 +243,8 @@ fn room_at_the_default_epsilon_converges_and_keeps_its_light() {
     // panels: the solution must converge (one version diverged here: clusters that straddle
     // an emitter's plane got its light on both sides) and lose little light. Measured: 9.5%
     // of the red band lost through cluster links (20% before the fix of receiving clusters'
-    // samples); the bound guards the class, not the goal (0.5%).
+    // samples). With the final gather's automatic passes and the rays of large polygons
+    // (2026-12-03): red +0.16%, green -0.20%, blue -0.37% (before: +0.44%, -0.29%, -0.81%).
     let s = room_scene(&[]);
     let (out, run) = solve_with(&s, &Settings::default());
     assert!(
@@ -253,7 +254,7 @@ fn room_at_the_default_epsilon_converges_and_keeps_its_light() {
     );
     for b in 0..s.bands as usize {
         let e = run.stats.balance.relative_imbalance(b);
-        assert!(e.abs() < 0.12, "band {b}: imbalance {:+.2}%", 100.0 * e);
+        assert!(e.abs() < 0.01, "band {b}: imbalance {:+.2}%", 100.0 * e);
     }
     assert!(out.0.iter().flatten().all(|v| v.is_finite()));
 }
@@ -591,11 +592,8 @@ fn more_gather_passes_bring_a_room_nearer_its_balance() {
     // towards its fixed point, whose inverse turns the samples' errors into light no lamp
     // sent. Measured on 2026-12-03, the small room below at 16 rays per side (red, - made):
     // 1 pass -1.37%, 2 passes -2.04%, 4 passes -3.17% with the same samples in every pass;
-    // 4 passes +0.06% (green +0.44%, blue +0.78%) with each pass's own. With the passes'
-    // number automatic (the default) the room, whose hierarchy alone makes 1.8% of its
-    // light, relights until a pass moves its light by less than 0.5% or the fourth pass:
-    // 2 passes -1.95%, automatic (4) -1.23%.
-    let s = room_scene(&[
+    // 4 passes +0.06% (green +0.44%, blue +0.78%) with each pass's own.
+    let small = [
         "--chairs",
         "8",
         "--tables",
@@ -608,40 +606,53 @@ fn more_gather_passes_bring_a_room_nearer_its_balance() {
         "6",
         "--width",
         "5",
-    ]);
-    let run_with = |rays: u32, passes: u32| {
-        let settings = Settings {
-            final_rays: rays,
-            final_passes: passes,
-            ..Settings::default()
-        };
-        solve_with(&s, &settings).1
+    ];
+    let s = room_scene(&small);
+    let settings = Settings {
+        final_rays: 16,
+        final_passes: 4,
+        ..Settings::default()
     };
-    let four = run_with(16, 4);
+    let (_, four) = solve_with(&s, &settings);
     assert_eq!(four.stats.final_passes, 4);
     assert_balanced(&s, &four, 0.01, "small room, 16 rays, 4 passes");
-    let worst = |run: &HrRun| {
-        (0..s.band_names.len())
-            .map(|b| run.stats.balance.relative_imbalance(b).abs())
-            .fold(0.0f64, f64::max)
-    };
-    let two = run_with(Settings::AUTO, 2);
-    let auto = run_with(Settings::AUTO, Settings::AUTO);
-    assert!(
-        auto.stats.final_passes > 2,
-        "automatic passes stopped at {} with the last moving {:.2}%",
-        auto.stats.final_passes,
-        100.0 * auto.stats.final_change
-    );
-    assert!(
-        auto.stats.final_passes == 4 || auto.stats.final_change < 0.005,
-        "{:?}",
-        auto.stats
-    );
-    assert!(
-        worst(&auto) < worst(&two),
-        "automatic passes {:.2}% against two passes {:.2}%",
-        100.0 * worst(&auto),
-        100.0 * worst(&two)
-    );
+}
+
+#[test]
+fn rooms_of_any_size_keep_their_light_at_the_defaults() {
+    // At the defaults (64 rays per side in a room), every side cast the same rays, so the
+    // few walls and floor, a thousand times the chairs' polygons, set the noise of the
+    // room's power: the passes of the gather moved the small room's light by 1% to 3%
+    // apiece without settling (8 passes: -0.70% red). Now a large polygon casts more rays
+    // (as the square root of its area over the typical polygon's, at most 16 times) and the
+    // passes go on (at most 4) until one moves the light by less than 0.5% of what enters.
+    // Measured on 2026-12-03 (red, green, blue; + lost), before (2 passes, the same rays
+    // for every side) and after: small -1.95/-1.65/-1.34% -> -0.32/-0.27/-0.32% (4 passes);
+    // large, with the automatic passes, without and with the large polygons' rays:
+    // +0.10/-0.13/-0.42% -> +0.20/-0.18/-0.48%.
+    // The default room is held in `room_at_the_default_epsilon_converges_and_keeps_its_light`.
+    for extra in [
+        &[
+            "--chairs",
+            "8",
+            "--tables",
+            "1",
+            "--orchids",
+            "1",
+            "--plants",
+            "1",
+            "--length",
+            "6",
+            "--width",
+            "5",
+        ][..],
+        &[
+            "--chairs", "40", "--tables", "5", "--height", "4", "--seed", "3",
+        ][..],
+    ] {
+        let s = room_scene(extra);
+        let (_, run) = solve_with(&s, &Settings::default());
+        assert!((2..=4).contains(&run.stats.final_passes), "{:?}", run.stats);
+        assert_balanced(&s, &run, 0.01, &format!("{extra:?}"));
+    }
 }

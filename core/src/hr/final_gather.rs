@@ -18,7 +18,7 @@
 
 use super::direct::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
 use super::exec::{Executor, Fallback, Progress, run_chunks};
-use super::gather_rays::{adaptive_rays, gathered_share, rays_per_side};
+use super::gather_rays::{adaptive_rays, gathered_share, polygon_rays, rays_per_side};
 use super::ids::{Elem, Kind};
 use super::layout::CHUNK;
 use super::state::State;
@@ -107,7 +107,7 @@ pub(crate) fn polygon<V: Visibility + ?Sized>(
     let mut side_rays = [0u32; 2];
     for (side, r) in side_rays.iter_mut().enumerate().take(State::sides(root)) {
         *r = adaptive_rays(
-            rays,
+            polygon_rays(st, rays, total_area as f32),
             gathered_share(st, ws, st.leaves(ws, root).map(|l| l.0), side),
         );
     }
@@ -601,7 +601,7 @@ pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
                     let mut cast = 0u32;
                     for side in 0..State::sides(e) {
                         let share = gathered_share(c.st, c.ws, core::iter::once(e), side);
-                        let side_rays = adaptive_rays(c.rays, share);
+                        let side_rays = adaptive_rays(polygon_rays(c.st, c.rays, total), share);
                         if side_rays == 0 {
                             // Nothing to gather: keep what the links bring (nothing).
                             let mut h = [0.0f32; 8];
