@@ -81,7 +81,7 @@ pub struct Settings {
     /// at most 0.65 / epsilon per side. Rounded to a square.
     pub final_rays: u32,
     /// Final gather passes (1..=4, or [`Settings::AUTO`]): with more than one, every leaf
-    /// patch first gathers its own light that many times less one (with as many rays as the
+    /// patch first gathers its own light that many times less one (with half the rays of the
     /// polygons' gather), and the polygons' gather reads those radiosities. `AUTO` relights
     /// at least once and goes on (up to 4 passes in all) while a pass still moves the light
     /// leaving the surfaces by more than [`final_gather::SETTLED`] of what enters.
