@@ -173,6 +173,14 @@ impl SolveReport {
                 .collect();
             writeln!(out, "  phases: {}; {} rays", parts.join(", "), self.rays)?;
         }
+        match (self.final_passes, self.final_change_percent) {
+            (Some(n), Some(moved)) if n > 1 => writeln!(
+                out,
+                "  final gather: {n} passes (the last relighting pass moved the leaving light by {moved:.2}% of what enters)"
+            )?,
+            (Some(1), _) => writeln!(out, "  final gather: 1 pass")?,
+            _ => {}
+        }
         writeln!(
             out,
             "  {} polygons, {} elements, {} links, {} iterations, {} refinement passes",

@@ -62,6 +62,10 @@ fn summary_tells_power_and_convergence() {
         text.contains("phases: setup 0.250 s, solving 1.125 s; 123456 rays"),
         "{text}"
     );
+    assert!(
+        text.contains("final gather: 3 passes (the last relighting pass moved the leaving light by 0.42% of what enters)"),
+        "{text}"
+    );
     // Old JSON without the new fields reads as converged, with no balance.
     let old = SolveReport::from_json(r#"{"method":"hr","epsilon":0.001,"threads":1,"polygons":1,"elements":1,"links":1,"iterations":1,"refinement_passes":1,"seconds":0.1,"peak_workspace_bytes":1,"workspace_bytes":1,"budget_limited":false,"error_percent":null}"#).unwrap();
     assert!(old.converged && old.power.is_empty() && old.remaining_change.is_none());
