@@ -506,27 +506,7 @@ fn furnished_rooms_keep_their_light_with_the_hierarchy_alone() {
     // gathered large clusters and merged light that keeps its power. Rooms of other sizes,
     // seeds and furniture counts; measured on 2026-12-03 (red, the worst band): default
     // +1.18%, seed 2 +0.82%, small -1.84% (made), large +2.01%.
-    for extra in [
-        &[][..],
-        &["--seed", "2"][..],
-        &[
-            "--chairs",
-            "8",
-            "--tables",
-            "1",
-            "--orchids",
-            "1",
-            "--plants",
-            "1",
-            "--length",
-            "6",
-            "--width",
-            "5",
-        ][..],
-        &[
-            "--chairs", "40", "--tables", "5", "--height", "4", "--seed", "3",
-        ][..],
-    ] {
+    for extra in [&[][..], &["--seed", "2"][..], SMALL_ROOM, LARGE_ROOM] {
         let s = room_scene(extra);
         let settings = Settings {
             final_rays: 0,
@@ -536,6 +516,25 @@ fn furnished_rooms_keep_their_light_with_the_hierarchy_alone() {
         assert_balanced(&s, &run, 0.025, &format!("{extra:?}"));
     }
 }
+
+/// A small room (6 x 5 m, 8 chairs) and a large, crowded one (40 chairs, 4 m high).
+const SMALL_ROOM: &[&str] = &[
+    "--chairs",
+    "8",
+    "--tables",
+    "1",
+    "--orchids",
+    "1",
+    "--plants",
+    "1",
+    "--length",
+    "6",
+    "--width",
+    "5",
+];
+const LARGE_ROOM: &[&str] = &[
+    "--chairs", "40", "--tables", "5", "--height", "4", "--seed", "3",
+];
 
 /// Every band of `run` (a solve of `s`) within `limit` (a fraction of what enters) of the
 /// power balance.
@@ -593,21 +592,7 @@ fn more_gather_passes_bring_a_room_nearer_its_balance() {
     // sent. Measured on 2026-12-03, the small room below at 16 rays per side (red, - made):
     // 1 pass -1.37%, 2 passes -2.04%, 4 passes -3.17% with the same samples in every pass;
     // 4 passes +0.06% (green +0.44%, blue +0.78%) with each pass's own.
-    let small = [
-        "--chairs",
-        "8",
-        "--tables",
-        "1",
-        "--orchids",
-        "1",
-        "--plants",
-        "1",
-        "--length",
-        "6",
-        "--width",
-        "5",
-    ];
-    let s = room_scene(&small);
+    let s = room_scene(SMALL_ROOM);
     let settings = Settings {
         final_rays: 16,
         final_passes: 4,
@@ -621,7 +606,7 @@ fn more_gather_passes_bring_a_room_nearer_its_balance() {
 #[test]
 fn rooms_of_any_size_keep_their_light_at_the_defaults() {
     // At the defaults (64 rays per side in a room), every side cast the same rays, so the
-    // few walls and floor, a thousand times the chairs' polygons, set the noise of the
+    // few walls and floor, far larger than the chairs' polygons, set the noise of the
     // room's power: the passes of the gather moved the small room's light by 1% to 3%
     // apiece without settling (8 passes: -0.70% red). Now a large polygon casts more rays
     // (as the square root of its area over the typical polygon's, at most 16 times) and the
@@ -631,25 +616,7 @@ fn rooms_of_any_size_keep_their_light_at_the_defaults() {
     // large, with the automatic passes, without and with the large polygons' rays:
     // +0.10/-0.13/-0.42% -> +0.20/-0.18/-0.48%.
     // The default room is held in `room_at_the_default_epsilon_converges_and_keeps_its_light`.
-    for extra in [
-        &[
-            "--chairs",
-            "8",
-            "--tables",
-            "1",
-            "--orchids",
-            "1",
-            "--plants",
-            "1",
-            "--length",
-            "6",
-            "--width",
-            "5",
-        ][..],
-        &[
-            "--chairs", "40", "--tables", "5", "--height", "4", "--seed", "3",
-        ][..],
-    ] {
+    for extra in [SMALL_ROOM, LARGE_ROOM] {
         let s = room_scene(extra);
         let (_, run) = solve_with(&s, &Settings::default());
         assert!((2..=4).contains(&run.stats.final_passes), "{:?}", run.stats);

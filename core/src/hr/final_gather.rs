@@ -481,14 +481,14 @@ pub(crate) const SETTLED: f32 = 0.005;
 /// The light leaving every exposed leaf side and what enters the scene (emitted, and the
 /// direct light of suns and sky on the receiving sides), per band (W).
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Leaving {
+struct Leaving {
     out: [f64; MAX_BANDS],
     input: [f64; MAX_BANDS],
 }
 
 impl Leaving {
     /// The largest change of any band's leaving light from `before`, relative to what enters.
-    pub(crate) fn change_from(&self, before: &Leaving, bands: usize) -> f32 {
+    fn change_from(&self, before: &Leaving, bands: usize) -> f32 {
         let mut worst = 0.0f64;
         for b in 0..bands {
             if self.input[b] > 0.0 {
@@ -500,7 +500,7 @@ impl Leaving {
 }
 
 /// Sums [`Leaving`] over the leaf patches as the solution stands.
-pub(crate) fn leaving_power(st: &State, ws: &[u8]) -> Leaving {
+fn leaving_power(st: &State, ws: &[u8]) -> Leaving {
     let nb = st.bands;
     let mut sum = Leaving::default();
     for kind in [Kind::Patch1, Kind::Patch2] {
@@ -525,6 +525,34 @@ pub(crate) fn leaving_power(st: &State, ws: &[u8]) -> Leaving {
     sum
 }
 
+/// The relighting passes before the polygons' gather: as many as the settings ask, or
+/// (for [`super::Settings::AUTO`]) until one moves the leaving light by less than
+/// [`SETTLED`] of what enters, at most [`super::MAX_FINAL_PASSES`] passes in all. Records
+/// the passes (the polygons' own included), the last pass's move and the rays in the stats.
+pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+) {
+    let asked = st.settings.final_passes;
+    let auto = asked == super::Settings::AUTO;
+    let passes = if auto { super::MAX_FINAL_PASSES } else { asked };
+    let mut before = leaving_power(st, ws);
+    for pass in 1..passes {
+        st.stats.rays += relight(st, ws, vis, ex, progress, pass - 1);
+        let after = leaving_power(st, ws);
+        st.stats.final_change = after.change_from(&before, st.bands);
+        st.stats.final_passes = pass;
+        before = after;
+        if auto && st.stats.final_change < SETTLED {
+            break;
+        }
+    }
+    st.stats.final_passes += 1;
+}
+
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a mut State,
     ws: &'a mut [u8],
@@ -543,7 +571,7 @@ struct Ctx<'a, 'v, V: ?Sized> {
 /// that cast the same rays iterate one sampled transport to its fixed point, whose inverse
 /// amplifies the samples' errors into light that no emitter sent (a room at 64 rays made
 /// 1.5% more light with four passes than with two). Returns the rays cast.
-pub(crate) fn relight<V: Visibility + ?Sized, E: Executor>(
+fn relight<V: Visibility + ?Sized, E: Executor>(
     st: &mut State,
     ws: &mut [u8],
     vis: &Vis<'_, V>,

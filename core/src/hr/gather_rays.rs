@@ -44,7 +44,7 @@ pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
 /// Rays per receiving side of a polygon of `area` (m^2), out of `full` for one of the scene's
 /// typical size: `full x sqrt(area / typical)`, between 1 and [`LARGE_BOOST`] times `full`.
 /// The noise a side leaves on the scene's power is its relative noise times its area, so
-/// the few large polygons of a room (walls and floor, a thousand times its chairs' polygons)
+/// the few large polygons of a room (walls and floor, far larger than its chairs' polygons)
 /// set the noise of its balance and of its picture: at 64 rays each, the passes of a small
 /// room's gather moved its light by 1% to 3% apiece, none settling.
 pub(crate) fn polygon_rays(st: &State, full: u32, area: f32) -> u32 {

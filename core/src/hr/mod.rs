@@ -565,22 +565,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.emitted_power = st.power;
         if gather_rays::rays_per_side(st, ws) > 0 {
             gather_rays::note_shares(st, ws);
-            let asked = st.settings.final_passes;
-            let auto = asked == Settings::AUTO;
-            let passes = if auto { MAX_FINAL_PASSES } else { asked };
-            let mut before = final_gather::leaving_power(st, ws);
-            for pass in 1..passes {
-                st.stats.rays +=
-                    final_gather::relight(st, ws, &self.vis, &mut self.seq, progress, pass - 1);
-                let after = final_gather::leaving_power(st, ws);
-                st.stats.final_change = after.change_from(&before, st.bands);
-                st.stats.final_passes = pass;
-                before = after;
-                if auto && st.stats.final_change < final_gather::SETTLED {
-                    break;
-                }
-            }
-            st.stats.final_passes += 1;
+            final_gather::relight_passes(st, ws, &self.vis, &mut self.seq, progress);
         }
         let rays = 4 * st.settings.rays;
         st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);

@@ -532,7 +532,7 @@ fn warn_unused(a: &Args) {
     }
 }
 
-/// `--final-rays`: `auto` or a count in 0..=1048576.
+/// `--final-passes`: `auto` or a count in 1..=4.
 fn parse_final_passes(s: &str) -> Result<u32, String> {
     if s.eq_ignore_ascii_case("auto") {
         return Ok(Settings::AUTO);
@@ -546,6 +546,7 @@ fn parse_final_passes(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `--final-rays`: `auto` or a count in 0..=1048576.
 fn parse_final_rays(s: &str) -> Result<u32, String> {
     if s.eq_ignore_ascii_case("auto") {
         return Ok(Settings::AUTO);
