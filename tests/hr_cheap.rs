@@ -127,7 +127,11 @@ fn phases_are_announced_before_their_work() {
         .unwrap()
         .scene;
     let mut log = Log(Vec::new());
-    solve_with(&scene, &Settings::default(), &mut log);
+    let (_, stats) = solve_with(&scene, &Settings::default(), &mut log);
+    // Every ray counted is charged to one phase, and each phase cast some.
+    let r = stats.rays_by_phase;
+    assert_eq!(r.lighting + r.links + r.final_gather, stats.rays, "{r:?}");
+    assert!(r.lighting > 0 && r.links > 0 && r.final_gather > 0, "{r:?}");
     for phase in [
         "lighting patches",
         "evaluating links",

@@ -110,6 +110,7 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
                     p.shadow = o[2];
                     c.st.set_patch(c.ws, e, &p);
                     c.st.stats.rays += o[3 + 2 * nb] as u64;
+                    c.st.stats.rays_by_phase.lighting += o[3 + 2 * nb] as u64;
                     for side in 0..State::sides(e) {
                         if let Some(d) = c.st.direct_mut(c.ws, e, side) {
                             d.copy_from_slice(&o[3 + side * nb..3 + (side + 1) * nb]);
@@ -405,6 +406,7 @@ pub(crate) fn test_closed<V: Visibility + ?Sized>(st: &mut State, ws: &[u8], vis
                 st.closed = false;
                 st.sees_backs = backs;
                 st.stats.rays += rays as u64;
+                st.stats.rays_by_phase.lighting += rays as u64;
                 return;
             }
         }
@@ -412,6 +414,7 @@ pub(crate) fn test_closed<V: Visibility + ?Sized>(st: &mut State, ws: &[u8], vis
     st.closed = st.polygons > 0;
     st.sees_backs = backs;
     st.stats.rays += rays as u64;
+    st.stats.rays_by_phase.lighting += rays as u64;
 }
 
 /// A band in which the scene has no steady state: no ray from any patch leaves it, none met

@@ -541,7 +541,9 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     let passes = if auto { super::MAX_FINAL_PASSES } else { asked };
     let mut before = leaving_power(st, ws);
     for pass in 1..passes {
-        st.stats.rays += relight(st, ws, vis, ex, progress, pass - 1);
+        let rays = relight(st, ws, vis, ex, progress, pass - 1);
+        st.stats.rays += rays;
+        st.stats.rays_by_phase.final_gather += rays;
         let after = leaving_power(st, ws);
         st.stats.final_change = after.change_from(&before, st.bands);
         st.stats.final_passes = pass;

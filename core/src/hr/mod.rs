@@ -165,6 +165,8 @@ pub struct Stats {
     pub evaluations: u64,
     /// Visibility rays cast.
     pub rays: u64,
+    /// Of `rays`, those of each phase.
+    pub rays_by_phase: RaysByPhase,
     /// Gather / push-pull iterations, all rounds.
     pub iterations: u64,
     /// Refine-then-solve rounds.
@@ -198,6 +200,17 @@ pub struct Stats {
     /// How much the last relighting pass moved the light leaving the surfaces, relative to
     /// what enters (largest band; 0 with fewer than two passes).
     pub final_change: f32,
+}
+
+/// Visibility rays per phase of a solve (what the ray count of [`Stats`] is spent on).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RaysByPhase {
+    /// Direct light of suns and sky on every patch, its buried points, the closed-scene test.
+    pub lighting: u64,
+    /// Visibility of links.
+    pub links: u64,
+    /// The final gather: relighting passes and the polygons' own gather.
+    pub final_gather: u64,
 }
 
 /// What a scene needs, in bytes of workspace.
@@ -573,6 +586,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
             .map_err(SolveError::Sink)?;
         st.stats.rays += written.rays;
+        st.stats.rays_by_phase.final_gather += written.rays;
         if let Some(absorbed) = written.absorbed {
             st.stats.balance.absorbed = absorbed;
         }

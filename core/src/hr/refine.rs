@@ -159,6 +159,7 @@ pub(crate) fn evaluate_pending<V: Visibility + ?Sized, E: Executor>(
                 c.st.set_link(c.ws, i as u32, &l);
                 c.st.stats.evaluations += 1;
                 c.st.stats.rays += o[kk + 2] as u64;
+                c.st.stats.rays_by_phase.links += o[kk + 2] as u64;
                 evaluated.set(evaluated.get() + 1);
             }
         },

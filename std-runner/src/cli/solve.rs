@@ -351,6 +351,11 @@ pub fn run(a: Args) -> Result<()> {
             let s = run.stats;
             report.threads = run.threads as u32;
             report.rays = s.rays;
+            report.rays_by_phase = Some(crate::output::RaysByPhase {
+                lighting: s.rays_by_phase.lighting,
+                links: s.rays_by_phase.links,
+                final_gather: s.rays_by_phase.final_gather,
+            });
             report.final_passes = Some(s.final_passes);
             report.final_change_percent =
                 Some(100.0 * s.final_change as f64).filter(|_| s.final_passes > 1);

@@ -33,7 +33,7 @@ pub use raster::Rasterizer;
 pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compare};
 pub use results::{ResultsFile, ResultsTable, ResultsWriter};
 pub use results_read::{TableError, read_results, read_results_file};
-pub use stats::{BandPower, PhaseTime, SolveReport};
+pub use stats::{BandPower, PhaseTime, RaysByPhase, SolveReport};
 
 #[cfg(test)]
 mod tests_camera;

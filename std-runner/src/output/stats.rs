@@ -103,9 +103,13 @@ pub struct SolveReport {
     /// solver). Phases that run every round (refining, evaluating links) add up.
     #[serde(default)]
     pub phases: Vec<PhaseTime>,
-    /// Rays cast (hr: link visibility, direct light, exposure, power balance, final gather).
+    /// Rays cast (hr: direct light and exposure, link visibility, final gather; the power
+    /// balance's own rays are not counted).
     #[serde(default)]
     pub rays: u64,
+    /// Of `rays`, those of each phase (hr; `null` for the exact solver).
+    #[serde(default)]
+    pub rays_by_phase: Option<RaysByPhase>,
     /// Final gather passes made, the polygons' own included (hr; 0 without the gather;
     /// `null` for the exact solver).
     #[serde(default)]
@@ -115,6 +119,17 @@ pub struct SolveReport {
     /// stop, when their number is automatic, once a pass moves it by less than 0.5%.
     #[serde(default)]
     pub final_change_percent: Option<f64>,
+}
+
+/// Rays cast per phase of a hierarchical solve.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RaysByPhase {
+    /// Direct light of suns and sky on every patch and its buried points.
+    pub lighting: u64,
+    /// Visibility of links.
+    pub links: u64,
+    /// The final gather: relighting passes and the polygons' own gather.
+    pub final_gather: u64,
 }
 
 impl SolveReport {
@@ -171,7 +186,15 @@ impl SolveReport {
                 .iter()
                 .map(|p| format!("{} {:.3} s", p.phase, p.seconds))
                 .collect();
-            writeln!(out, "  phases: {}; {} rays", parts.join(", "), self.rays)?;
+            write!(out, "  phases: {}; {} rays", parts.join(", "), self.rays)?;
+            match self.rays_by_phase {
+                Some(r) => writeln!(
+                    out,
+                    " (lighting {}, links {}, final gather {})",
+                    r.lighting, r.links, r.final_gather
+                )?,
+                None => writeln!(out)?,
+            }
         }
         match (self.final_passes, self.final_change_percent) {
             (Some(n), Some(moved)) if n > 1 => writeln!(

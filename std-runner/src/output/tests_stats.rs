@@ -1,7 +1,7 @@
 //! The stats report: JSON round trip with every field, and the summary text.
 
 use super::reference::{Comparison, WorstPolygon};
-use super::stats::{BandPower, PhaseTime, SolveReport, bytes};
+use super::stats::{BandPower, PhaseTime, RaysByPhase, SolveReport, bytes};
 
 fn report() -> SolveReport {
     SolveReport {
@@ -45,6 +45,11 @@ fn report() -> SolveReport {
             },
         ],
         rays: 123_456,
+        rays_by_phase: Some(RaysByPhase {
+            lighting: 100_000,
+            links: 20_000,
+            final_gather: 3_456,
+        }),
         final_passes: Some(3),
         final_change_percent: Some(0.42),
     }
@@ -59,7 +64,7 @@ fn summary_tells_power_and_convergence() {
     assert!(text.contains("NOT converged"), "{text}");
     assert!(text.contains("3.0e-4"), "{text}");
     assert!(
-        text.contains("phases: setup 0.250 s, solving 1.125 s; 123456 rays"),
+        text.contains("phases: setup 0.250 s, solving 1.125 s; 123456 rays (lighting 100000, links 20000, final gather 3456)"),
         "{text}"
     );
     assert!(
@@ -97,6 +102,7 @@ fn json_round_trip_holds_every_field() {
         "power",
         "phases",
         "rays",
+        "rays_by_phase",
         "final_passes",
         "final_change_percent",
     ] {
