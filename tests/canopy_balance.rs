@@ -86,3 +86,48 @@ fn a_growing_canopy_keeps_its_light_with_the_hierarchy_alone() {
         100.0 * last
     );
 }
+
+fn with_gather(scene: &Scene, final_passes: u32) -> HrRun {
+    let settings = Settings {
+        final_passes,
+        ..Settings::default()
+    };
+    solve_hr(
+        scene,
+        &settings,
+        2,
+        None,
+        VisibilityChoice::Obvhs,
+        &Progress::new(true),
+        &mut Discard,
+    )
+    .unwrap()
+}
+
+#[test]
+fn the_gathers_first_correction_settles_a_canopy() {
+    // The first relighting pass hands what it changed to the links, which carry it to all
+    // it lights: one pass brings the light of a 6 x 10 canopy to its balance, where passes
+    // that only re-gather (each a Jacobi step) moved 0.3 to 0.4% apiece and left NIR +0.41%
+    // after one, +0.15% after three. Measured: +0.06% after one (moves 1.19%, then 0.09%);
+    // automatic: 3 passes, the polygons' own included.
+    let scene = canopy_scene(6, 10);
+    let bands = scene.bands as usize;
+    for (passes, what) in [(2, "one relighting pass"), (Settings::AUTO, "automatic")] {
+        let run = with_gather(&scene, passes);
+        let nir = run.stats.balance.relative_imbalance(bands - 1);
+        eprintln!(
+            "{what}: {} passes, NIR {:+.3}%, last move {:.2}%",
+            run.stats.final_passes,
+            100.0 * nir,
+            100.0 * run.stats.final_change
+        );
+        assert!(run.stats.converged, "{what}: not converged");
+        assert!(
+            nir.abs() < 0.002,
+            "{what}: NIR imbalance {:+.3}%",
+            100.0 * nir
+        );
+        assert!(run.stats.final_passes <= 3, "{what}: {:?}", run.stats);
+    }
+}

@@ -100,7 +100,7 @@ pub(crate) fn update<E: Executor>(
 /// The irradiance of a leaf patch's side (W/m^2 per band): what it gathered and inherited
 /// from ancestor patches plus its polygon's share of what its clusters receive (by the
 /// polygon's own cosine, see `oriented`), scaled by its closure factor, plus the direct
-/// light of suns and sky.
+/// light of suns and sky, plus the final gather's correction (see `final_gather::relight`).
 pub(crate) fn leaf_irradiance(st: &State, ws: &[u8], e: Elem, side: usize, out: &mut [f32]) {
     let p = st.patch(ws, e);
     let c = p.closure[side.min(1)];
@@ -112,6 +112,11 @@ pub(crate) fn leaf_irradiance(st: &State, ws: &[u8], e: Elem, side: usize, out: 
         *o = ((1.0 + c as f64) * (*h as f64 + *hc as f64)) as f32;
     }
     if let Some(d) = st.direct(ws, e, side) {
+        for (o, v) in out.iter_mut().zip(d) {
+            *o += v;
+        }
+    }
+    if let Some(d) = st.correction(ws, e, side) {
         for (o, v) in out.iter_mut().zip(d) {
             *o += v;
         }

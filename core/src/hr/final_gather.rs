@@ -539,6 +539,10 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     let asked = st.settings.final_passes;
     let auto = asked == super::Settings::AUTO;
     let passes = if auto { super::MAX_FINAL_PASSES } else { asked };
+    if passes > 1 {
+        st.take_corrections(ws);
+        st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
+    }
     let mut before = leaving_power(st, ws);
     for pass in 1..passes {
         let rays = relight(st, ws, vis, ex, progress, pass - 1);
@@ -569,7 +573,19 @@ struct Ctx<'a, 'v, V: ?Sized> {
 /// radiosities follow from the materials and are averaged up the hierarchy. What a leaf
 /// shows others then carries its own visibility, not its links' average, so the final
 /// gather reads better radiosities (a Jacobi step with exact visibility; the links' error
-/// shrinks by about the reflectance). Pass `pass` (from 0) draws samples of its own: passes
+/// shrinks by about the reflectance).
+///
+/// The gathered light is kept as a correction of each leaf side's irradiance (gathered less
+/// what the links bring, see `State::correction`), and the first pass hands it to the
+/// solver: the links carry the change on to everything it lights (a defect correction: the
+/// hierarchy's transport, wrong locally but right in the large, solves for the change). A
+/// Jacobi step moves the light of a canopy of NIR albedo 0.9 by only 35-40% of the way per
+/// pass (the default maize canopy was still moving 1% after four); corrected, one pass
+/// lands within 0.1% of the balance. Later passes are plain Jacobi steps: the correction
+/// also carries the samples' noise, which the links spread in rooms of bright walls (their
+/// moves went 3.5%, 0.5%, 1.6% with every pass corrected). Without workspace blocks left
+/// for the corrections, every pass is a Jacobi step. Pass `pass` (from 0) draws samples of
+/// its own: passes
 /// that cast the same rays iterate one sampled transport to its fixed point, whose inverse
 /// amplifies the samples' errors into light that no emitter sent (a room at 64 rays made
 /// 1.5% more light with four passes than with two). Returns the rays cast.
@@ -682,6 +698,27 @@ fn relight<V: Visibility + ?Sized, E: Executor>(
                     }
                     cast += o[0] as u64;
                     let e = Elem::new(kind, i as u32);
+                    if c.st.correction != NONE as usize {
+                        // The correction that makes the irradiance read what was gathered (plus
+                        // direct) with the links as they stand: the gathered light less
+                        // what the links bring.
+                        for side in 0..State::sides(e) {
+                            let mut now = [0.0f32; 8];
+                            super::closure::leaf_irradiance(c.st, c.ws, e, side, &mut now[..nb]);
+                            let mut d = [0.0f32; 8];
+                            if let Some(v) = c.st.direct(c.ws, e, side) {
+                                d[..nb].copy_from_slice(v);
+                            }
+                            let g = &o[1 + side * nb..1 + (side + 1) * nb];
+                            if let Some(corr) = c.st.correction_mut(c.ws, e, side) {
+                                for b in 0..nb {
+                                    let links = now[b] - d[b] - corr[b];
+                                    corr[b] = g[b] - links;
+                                }
+                            }
+                        }
+                        continue;
+                    }
                     let p = c.st.patch(c.ws, e);
                     // leaf_irradiance reads (1 + closure) (h + the polygon's share of cluster
                     // links) + direct: set h so that it reads the gathered light + direct.
@@ -709,6 +746,29 @@ fn relight<V: Visibility + ?Sized, E: Executor>(
         );
         offset += n as u64;
     }
-    super::solve::pull(st, ws);
+    if st.correction != NONE as usize && pass < CORRECTED_PASSES {
+        // The links carry the change to everything it lights (a defect correction).
+        let tol = st.settings.tolerance;
+        super::solve::iterate(st, ws, ex, &mut Relabel(progress), tol);
+    } else {
+        super::solve::pull(st, ws);
+    }
     cast
+}
+
+/// Relighting passes whose change the links carry on (see `relight`): the first.
+const CORRECTED_PASSES: u32 = 1;
+
+/// The solver's iterations inside the final gather, reported as part of it.
+struct Relabel<'a>(&'a mut dyn Progress);
+
+impl Progress for Relabel<'_> {
+    fn report(&mut self, what: &str, done: u64, total: u64) {
+        let what = if what.starts_with("solving") {
+            "final gather (solving)"
+        } else {
+            what
+        };
+        self.0.report(what, done, total)
+    }
 }

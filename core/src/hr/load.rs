@@ -89,6 +89,8 @@ pub(crate) fn load<S: SceneSource>(
         pending_links: 0,
         touched: [(0, u32::MAX); 3],
         shadow_checked: [0; 2],
+        correction: NONE as usize,
+        correction_split: 0,
         closed: false,
         sees_backs: false,
         scene_min: Vec3::ZERO,

@@ -61,6 +61,11 @@ pub(crate) struct State {
     /// Per patch pool, the patches below this index were checked for shadow edges in this
     /// round (see `refine`).
     pub shadow_checked: [u32; 2],
+    /// The final gather's corrections (see `final_gather::relight`): byte offset of one
+    /// value per band for every side of every patch, one-sided patches first, or `NONE as
+    /// usize` before the gather takes them; and how many one-sided patches there were then.
+    pub correction: usize,
+    pub correction_split: u32,
     /// The scene's box (m).
     pub scene_min: Vec3,
     pub scene_max: Vec3,
@@ -124,6 +129,56 @@ impl State {
             Kind::Source => self.lay.sources + e.index() as usize * s.source,
             k => self.pool(k).at(ws, &self.blocks, e.index()),
         }
+    }
+
+    /// The final gather's correction of a patch side's irradiance (W/m^2 per band), if the
+    /// gather keeps them (see `correction`).
+    pub(crate) fn correction<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
+        let at = self.correction_at(e, side)?;
+        Some(floats(ws, at, self.bands))
+    }
+
+    pub(crate) fn correction_mut<'a>(
+        &self,
+        ws: &'a mut [u8],
+        e: Elem,
+        side: usize,
+    ) -> Option<&'a mut [f32]> {
+        let at = self.correction_at(e, side)?;
+        Some(floats_mut(ws, at, self.bands))
+    }
+
+    fn correction_at(&self, e: Elem, side: usize) -> Option<usize> {
+        if self.correction == NONE as usize {
+            return None;
+        }
+        let slot = match e.kind() {
+            Kind::Patch1 => e.index() as usize,
+            Kind::Patch2 => self.correction_split as usize + 2 * e.index() as usize + side.min(1),
+            _ => return None,
+        };
+        Some(self.correction + 4 * self.bands * slot)
+    }
+
+    /// Takes workspace blocks for the final gather's corrections, zeroed; false (and
+    /// nothing taken) when the blocks left cannot hold them.
+    pub(crate) fn take_corrections(&mut self, ws: &mut [u8]) -> bool {
+        if self.correction != NONE as usize {
+            return true;
+        }
+        let slots = self.patches[0].len as usize + 2 * self.patches[1].len as usize;
+        let bytes = 4 * self.bands * slots;
+        let size = self.blocks.size.max(1);
+        let need = bytes.div_ceil(size);
+        if need > (self.blocks.total - self.blocks.used) as usize {
+            return false;
+        }
+        let at = self.blocks.base + self.blocks.used as usize * size;
+        ws[at..at + bytes].fill(0);
+        self.blocks.used += need as u32;
+        self.correction = at;
+        self.correction_split = self.patches[0].len;
+        true
     }
 
     /// Byte offset of an element's values.
