@@ -82,7 +82,9 @@ pub struct Settings {
     pub final_rays: u32,
     /// Final gather passes (1..=4, or [`Settings::AUTO`]): with more than one, every leaf
     /// patch first gathers its own light that many times less one (with half the rays of the
-    /// polygons' gather), and the polygons' gather reads those radiosities. `AUTO` relights
+    /// polygons' gather), and the polygons' gather reads those radiosities; the first such
+    /// pass solves the hierarchy again with what it changed, so the links carry the change
+    /// on (see `final_gather::relight`). `AUTO` relights
     /// at least once and goes on (up to 4 passes in all) while a pass still moves the light
     /// leaving the surfaces by more than [`final_gather::SETTLED`] of what enters.
     pub final_passes: u32,

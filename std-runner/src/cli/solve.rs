@@ -90,7 +90,8 @@ pub struct Args {
     #[arg(long, default_value = "auto", value_parser = parse_final_rays)]
     pub final_rays: u32,
     /// Final gather passes (1..=4): with 2 or more every patch gathers its own light first
-    /// (each such pass costs about half the polygons' gather); `auto` relights at least
+    /// (each such pass costs about half the polygons' gather; the first also solves the
+    /// hierarchy again with what it changed); `auto` relights at least
     /// once and again while a pass still moves the leaving light by 0.5% of what enters.
     #[arg(long, default_value = "auto", value_parser = parse_final_passes)]
     pub final_passes: u32,
