@@ -34,6 +34,7 @@ mod layout;
 mod load;
 mod oriented;
 mod output;
+mod pending;
 mod pool;
 mod records;
 mod refine;
@@ -505,7 +506,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         }
         solve::pull(&st, ws);
         st.power = solve::flow(&st, ws).max(f32::MIN_POSITIVE);
-        refine::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
+        pending::evaluate_pending(&mut st, ws, &vis, &mut seq, progress);
         Ok(Run { st, ws, vis, seq })
     }
 
