@@ -29,9 +29,11 @@ impl Sink for Discard {
     }
 }
 
-fn hierarchy_alone(scene: &Scene) -> HrRun {
+/// Solves `scene` at the defaults with `final_rays` and `final_passes` (2 threads, obvhs).
+fn solve(scene: &Scene, final_rays: u32, final_passes: u32) -> HrRun {
     let settings = Settings {
-        final_rays: 0,
+        final_rays,
+        final_passes,
         ..Settings::default()
     };
     solve_hr(
@@ -56,7 +58,7 @@ fn a_growing_canopy_keeps_its_light_with_the_hierarchy_alone() {
     let mut nir = Vec::new();
     for (rows, plants) in [(3, 12), (6, 10), (20, 30)] {
         let scene = canopy_scene(rows, plants);
-        let run = hierarchy_alone(&scene);
+        let run = solve(&scene, 0, Settings::default().final_passes);
         assert!(run.stats.converged, "{rows} x {plants}: not converged");
         let bands = scene.bands as usize;
         let e: Vec<f64> = (0..bands)
@@ -87,23 +89,6 @@ fn a_growing_canopy_keeps_its_light_with_the_hierarchy_alone() {
     );
 }
 
-fn with_gather(scene: &Scene, final_passes: u32) -> HrRun {
-    let settings = Settings {
-        final_passes,
-        ..Settings::default()
-    };
-    solve_hr(
-        scene,
-        &settings,
-        2,
-        None,
-        VisibilityChoice::Obvhs,
-        &Progress::new(true),
-        &mut Discard,
-    )
-    .unwrap()
-}
-
 #[test]
 fn the_gathers_first_correction_settles_a_canopy() {
     // The first relighting pass hands what it changed to the links, which carry it to all
@@ -114,7 +99,7 @@ fn the_gathers_first_correction_settles_a_canopy() {
     let scene = canopy_scene(6, 10);
     let bands = scene.bands as usize;
     for (passes, what) in [(2, "one relighting pass"), (Settings::AUTO, "automatic")] {
-        let run = with_gather(&scene, passes);
+        let run = solve(&scene, Settings::AUTO, passes);
         let nir = run.stats.balance.relative_imbalance(bands - 1);
         eprintln!(
             "{what}: {} passes, NIR {:+.3}%, last move {:.2}%",

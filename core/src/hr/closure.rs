@@ -100,7 +100,7 @@ pub(crate) fn update<E: Executor>(
 /// The irradiance of a leaf patch's side (W/m^2 per band): what it gathered and inherited
 /// from ancestor patches plus its polygon's share of what its clusters receive (by the
 /// polygon's own cosine, see `oriented`), scaled by its closure factor, plus the direct
-/// light of suns and sky, plus the final gather's correction (see `final_gather::relight`).
+/// light of suns and sky, plus the final gather's correction (see `relight::relight`).
 pub(crate) fn leaf_irradiance(st: &State, ws: &[u8], e: Elem, side: usize, out: &mut [f32]) {
     let p = st.patch(ws, e);
     let c = p.closure[side.min(1)];

@@ -38,6 +38,7 @@ mod pending;
 mod pool;
 mod records;
 mod refine;
+mod relight;
 mod rest_scale;
 mod sample;
 mod shoot;
@@ -85,9 +86,9 @@ pub struct Settings {
     /// patch first gathers its own light that many times less one (with half the rays of the
     /// polygons' gather), and the polygons' gather reads those radiosities; the first such
     /// pass solves the hierarchy again with what it changed, so the links carry the change
-    /// on (see `final_gather::relight`). `AUTO` relights
+    /// on (see `relight::relight`). `AUTO` relights
     /// at least once and goes on (up to 4 passes in all) while a pass still moves the light
-    /// leaving the surfaces by more than [`final_gather::SETTLED`] of what enters.
+    /// leaving the surfaces by more than [`relight::SETTLED`] of what enters.
     pub final_passes: u32,
 }
 
@@ -581,7 +582,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.emitted_power = st.power;
         if gather_rays::rays_per_side(st, ws) > 0 {
             gather_rays::note_shares(st, ws);
-            final_gather::relight_passes(st, ws, &self.vis, &mut self.seq, progress);
+            relight::relight_passes(st, ws, &self.vis, &mut self.seq, progress);
         }
         let rays = 4 * st.settings.rays;
         st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);

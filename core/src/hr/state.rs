@@ -61,7 +61,7 @@ pub(crate) struct State {
     /// Per patch pool, the patches below this index were checked for shadow edges in this
     /// round (see `refine`).
     pub shadow_checked: [u32; 2],
-    /// The final gather's corrections (see `final_gather::relight`): byte offset of one
+    /// The final gather's corrections (see `relight::relight`): byte offset of one
     /// value per band for every side of every patch, one-sided patches first, or `NONE as
     /// usize` before the gather takes them; and how many one-sided patches there were then.
     pub correction: usize,
