@@ -19,6 +19,16 @@ pub trait Visibility: Sync {
     /// light that is absorbed by the back of a one-sided polygon (the power balance, and
     /// points buried inside closed objects).
     fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)>;
+
+    /// [`Visibility::transmittance`] of a segment that runs from `from` along `towards`, the
+    /// unit direction of a sun or sky source, to `to` beyond the scene. Every such ray is
+    /// parallel to one of a few directions, so a caster may answer it from a structure built
+    /// for that direction (the runner projects the polygons along it onto a grid); the
+    /// answer must be the same. The default casts the segment.
+    fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
+        let _ = towards;
+        self.transmittance(from, to, skip)
+    }
 }
 
 /// Nothing ever blocks: for scenes known to be convex, and for tests.
@@ -38,6 +48,10 @@ impl Visibility for Unoccluded {
 impl<V: Visibility + ?Sized> Visibility for &V {
     fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
         (**self).transmittance(from, to, skip)
+    }
+
+    fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
+        (**self).transmittance_towards(from, to, towards, skip)
     }
 
     fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {

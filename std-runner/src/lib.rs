@@ -2,6 +2,7 @@
 //! compilation to the core's binary image, files, and the `hirad` command line.
 
 pub mod cli;
+pub mod directional;
 pub mod exact;
 pub mod files;
 pub mod generate;

@@ -15,6 +15,7 @@
 //! power of two to a unit half-extent) and its boxes are padded by 1e-5 of that unit, which
 //! makes the f32 box tests conservative at any scene scale.
 
+use crate::directional::DirectionalGrid;
 use glam::{DVec3, UVec2, Vec3, Vec3A};
 use hirad_core::visibility::Visibility;
 use obvhs::BvhBuildParams;
@@ -40,6 +41,10 @@ const BOX_PAD: f32 = 1e-5;
 /// that the segment spans `0..RAY_STRETCH` and the clamp (1e-4 / 16 = 6.25e-6 of the segment)
 /// lies below [`T_MARGIN`]. A power of two keeps the scaling exact.
 const RAY_STRETCH: f32 = 16.0;
+
+/// Most bytes per polygon that the directional grids may hold together (one grid takes
+/// about 75 under a maize canopy: a few suns fit, a sky of a hundred directions would not).
+pub const DIRECTIONAL_BYTES_PER_POLYGON: usize = 512;
 
 /// Groups of coincident polygons larger than this are first tested as a whole (see
 /// `ObvhsVisibility::group_boxes`).
@@ -108,6 +113,9 @@ pub struct ObvhsVisibility {
     /// a segment whose part inside it lies within [`T_MARGIN`] of an end crosses none of
     /// them, so thousands of coincident polygons cost one test, not thousands.
     group_boxes: Vec<(DVec3, DVec3)>,
+    /// Grids for rays along the directions of the scene's sources (see
+    /// [`ObvhsVisibility::with_directions`]).
+    directional: Vec<DirectionalGrid>,
     /// Centre of the normalised frame (m).
     centre: Vec3,
     /// World-to-normalised scale (1/m), a power of two.
@@ -162,6 +170,7 @@ impl ObvhsVisibility {
                 groups: vec![0],
                 members: Vec::new(),
                 group_boxes: Vec::new(),
+                directional: Vec::new(),
                 centre: Vec3::ZERO,
                 inv_scale: 1.0,
             });
@@ -242,9 +251,43 @@ impl ObvhsVisibility {
             groups,
             members,
             group_boxes,
+            directional: Vec::new(),
             centre,
             inv_scale,
         })
+    }
+
+    /// Adds a grid of the polygons projected along each of `directions` (unit directions of
+    /// sources: the scene's suns), in order, while the grids together hold at most
+    /// [`DIRECTIONAL_BYTES_PER_POLYGON`] bytes per polygon (or 16 MiB): rays along them
+    /// ([`Visibility::transmittance_towards`]) then test the few polygons of one cell
+    /// instead of walking the BVH, with the same exact test and so the same answers; rays
+    /// along other directions walk the BVH. `polygons` are those given to
+    /// [`ObvhsVisibility::new`].
+    pub fn with_directions<P: AsRef<[Vec3]>>(
+        mut self,
+        polygons: &[P],
+        directions: &[Vec3],
+    ) -> Self {
+        let budget = (DIRECTIONAL_BYTES_PER_POLYGON * polygons.len()).max(16 << 20);
+        for &d in directions {
+            if self.directional.iter().any(|g| g.runs_along(d)) {
+                continue;
+            }
+            let Some(g) = DirectionalGrid::new(polygons, d) else {
+                continue;
+            };
+            if self.directional_bytes() + g.bytes() > budget {
+                break;
+            }
+            self.directional.push(g);
+        }
+        self
+    }
+
+    /// Bytes held by the directional grids.
+    pub fn directional_bytes(&self) -> usize {
+        self.directional.iter().map(DirectionalGrid::bytes).sum()
     }
 
     /// Whether the segment `o + t d` can cross a member of group `g` at
@@ -481,6 +524,22 @@ impl Visibility for ObvhsVisibility {
             if blocked { 0.0 } else { f32::INFINITY }
         });
         if clear { 1.0 } else { 0.0 }
+    }
+
+    /// Along a direction with a grid, the polygons of the origin's cell only; else the BVH.
+    fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
+        if let Some(g) = self.directional.iter().find(|g| g.runs_along(towards)) {
+            if from.is_finite() && to.is_finite() {
+                let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
+                let hit = g.any(from, to, |id| {
+                    id != skip[0] && id != skip[1] && self.blocks(id as usize, o, d)
+                });
+                if let Some(blocked) = hit {
+                    return if blocked { 0.0 } else { 1.0 };
+                }
+            }
+        }
+        self.transmittance(from, to, skip)
     }
 
     /// The nearest crossing by the same exact test as [`Visibility::transmittance`]; ties

@@ -341,3 +341,106 @@ fn a_stack_of_coincident_polygons_blocks_through_it_and_not_from_it() {
     assert_eq!(v.brute_force(x, x + Vec3::Z * 0.5, [3, NONE]), 1.0);
     assert_eq!(v.brute_force(below, x + Vec3::Z * 0.5, [NONE, NONE]), 0.0);
 }
+
+/// Unit directions over zenith angles 0 to 85 degrees and all azimuths, with the axes
+/// themselves and a direction just off the vertical.
+fn sweep_directions() -> Vec<Vec3> {
+    let mut dirs = vec![
+        Vec3::Z,
+        Vec3::X,
+        -Vec3::Y,
+        Vec3::new(1e-4, 0.0, 1.0).normalize(),
+    ];
+    for zenith in [0.0f32, 10.0, 30.0, 45.0, 60.0, 70.0, 85.0] {
+        for azimuth in [0.0f32, 37.0, 90.0, 200.0, 315.0] {
+            let (z, a) = (zenith.to_radians(), azimuth.to_radians());
+            dirs.push(Vec3::new(z.sin() * a.cos(), z.sin() * a.sin(), z.cos()).normalize());
+        }
+    }
+    dirs
+}
+
+#[test]
+fn rays_along_a_source_direction_get_the_bvh_answers() {
+    for (seed, size) in [(21, 1.0f32), (22, 1e-3), (23, 1e3), (24, 40.0)] {
+        let polys = scene(seed, 400, size);
+        let dirs = sweep_directions();
+        let plain = ObvhsVisibility::new(&polys).unwrap();
+        let vis = ObvhsVisibility::new(&polys)
+            .unwrap()
+            .with_directions(&polys, &dirs);
+        assert!(vis.directional_bytes() > 0);
+        let mut rng = Rng(seed ^ 0x51, 7);
+        let (mut blocked, mut total) = (0, 0);
+        for (k, &d) in dirs.iter().enumerate() {
+            for j in 0..240u32 {
+                let p = &polys[(j as usize * 13 + k) % polys.len()];
+                let id = ((j as usize * 13 + k) % polys.len()) as u32;
+                let (from, skip) = match j % 4 {
+                    // On a polygon, skipping it (as the solver casts).
+                    0 => ((p[0] + p[1] + p[2]) / 3.0, [id, NONE]),
+                    // Straight below a corner along the ray: it grazes the corner, on the
+                    // edge of the polygon's projected box.
+                    1 => (p[1] - d * size * 0.3, [NONE, NONE]),
+                    // Anywhere, also outside the scene's projection.
+                    2 => ((rng.point(3.0) - 1.0) * size, [NONE, NONE]),
+                    _ => (rng.point(size), [NONE, NONE]),
+                };
+                let to = from + d * size * 4.0;
+                let fast = vis.transmittance_towards(from, to, d, skip);
+                assert_eq!(fast, plain.transmittance(from, to, skip), "{seed} {k} {j}");
+                assert_eq!(fast, vis.brute_force(from, to, skip), "{seed} {k} {j}");
+                // A segment that does not run along the direction it names is cast.
+                let bent = to + Vec3::new(0.3, -0.2, 0.1) * size;
+                assert_eq!(
+                    vis.transmittance_towards(from, bent, d, skip),
+                    vis.brute_force(from, bent, skip),
+                    "{seed} {k} {j} bent"
+                );
+                blocked += (fast == 0.0) as usize;
+                total += 1;
+            }
+        }
+        // Both outcomes occur often.
+        assert!(
+            blocked > total / 10 && blocked < total * 9 / 10,
+            "{blocked} of {total}"
+        );
+    }
+}
+
+#[test]
+fn directional_grids_stay_within_their_memory() {
+    // Large overlapping squares, each covering the whole projection: the grid coarsens
+    // rather than list every square in every cell; a thousand suns stop at the budget.
+    let n = 3000;
+    let polys: Vec<Vec<Vec3>> = (0..n)
+        .map(|k| {
+            let z = k as f32 * 0.01;
+            let o = (k % 7) as f32 * 0.01;
+            vec![
+                Vec3::new(o, 0.0, z),
+                Vec3::new(10.0 + o, 0.0, z),
+                Vec3::new(10.0 + o, 10.0, z),
+                Vec3::new(o, 10.0, z),
+            ]
+        })
+        .collect();
+    let suns: Vec<Vec3> = (0..1000)
+        .map(|k| Vec3::new((k as f32 * 0.001).sin() * 0.3, 0.1, 1.0).normalize())
+        .collect();
+    let vis = ObvhsVisibility::new(&polys)
+        .unwrap()
+        .with_directions(&polys, &suns);
+    let budget = (DIRECTIONAL_BYTES_PER_POLYGON * n).max(16 << 20);
+    assert!(vis.directional_bytes() > 0 && vis.directional_bytes() <= budget);
+    // Under the stack: blocked; above it: clear; in between, blocked by what lies above.
+    for (z, expect) in [(-1.0f32, 0.0f32), (40.0, 1.0), (15.0, 0.0)] {
+        let from = Vec3::new(5.0, 5.0, z);
+        let d = suns[0];
+        assert_eq!(
+            vis.transmittance_towards(from, from + d * 100.0, d, [NONE, NONE]),
+            expect
+        );
+    }
+}

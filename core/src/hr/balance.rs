@@ -332,7 +332,7 @@ fn back_direct<V: Visibility + ?Sized>(
                 ((j % grid) as f32 + u) / grid as f32,
                 ((j / grid) as f32 + v) / grid as f32,
             );
-            lit += vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
+            lit += vis.transmittance_towards(x, st.beyond(x, towards), towards, [poly, NONE]);
         }
         lit /= (grid * grid) as f32;
         let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);

@@ -498,7 +498,7 @@ fn lit_fraction<V: Visibility + ?Sized>(
             let vv = v0 + ((k / 2) as f32 + jv) * half;
             let x = point_on(corners, u, vv);
             *rays += 1;
-            *v = vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
+            *v = vis.transmittance_towards(x, st.beyond(x, towards), towards, [poly, NONE]);
             *w = jacobian(corners, u, vv);
         }
         (vals, wts)
@@ -651,7 +651,8 @@ fn sky_light<V: Visibility + ?Sized>(
         let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, pick)));
         let x = point_on(corners, u, v);
         *rays += 1;
-        let t = vis.transmittance(x, st.beyond(x, Vec3::from(src.towards)), [p.poly, NONE]);
+        let towards = Vec3::from(src.towards);
+        let t = vis.transmittance_towards(x, st.beyond(x, towards), towards, [p.poly, NONE]);
         if t <= 0.0 {
             continue;
         }

@@ -685,7 +685,7 @@ fn to_point<V: Visibility + ?Sized>(
             if c <= 0.0 {
                 return (0.0, 0.0, 0, NO);
             }
-            let v = vis.transmittance(x, st.beyond(x, towards), [poly, NONE]);
+            let v = vis.transmittance_towards(x, st.beyond(x, towards), towards, [poly, NONE]);
             out.rays += 1;
             out.partial |= v < 1.0;
             (c * v, c, 0, NO)

@@ -56,6 +56,15 @@ impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
         }
     }
 
+    fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
+        match self.vis {
+            Vis::External(v) => v.transmittance_towards(from, to, towards, skip),
+            Vis::Internal(bvh) => {
+                BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip)
+            }
+        }
+    }
+
     fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
         match self.vis {
             Vis::External(v) => v.first_hit(from, to, skip),

@@ -184,7 +184,10 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     let result = match visibility {
         VisibilityChoice::Obvhs => {
             let polygons = world_polygons(scene);
-            let vis = ObvhsVisibility::new(&polygons).map_err(|e| anyhow!("{e}"))?;
+            let directions: Vec<Vec3> = scene.suns.iter().map(|l| l.towards).collect();
+            let vis = ObvhsVisibility::new(&polygons)
+                .map_err(|e| anyhow!("{e}"))?
+                .with_directions(&polygons, &directions);
             drop(polygons);
             hr::solve(
                 &view,
