@@ -97,22 +97,23 @@ impl std::error::Error for VisibilityError {}
 pub struct ObvhsVisibility {
     /// `None` when there are no polygons.
     bvh: Option<CwBvh>,
-    /// Per polygon, the triangles `a b c` and (quads only) `a c d`, prepared in f64.
-    triangles: Vec<[Prepared; 2]>,
-    /// 3 or 4 per polygon.
-    counts: Vec<u8>,
+    /// The polygons prepared for the exact test, in the order of the tree's leaves: the
+    /// polygons a leaf stands for lie side by side (one stream of memory per leaf, no
+    /// lookups through ids).
+    slotted: Vec<Slotted>,
+    /// Polygon id -> its place in `slotted`.
+    place: Vec<u32>,
     /// Padded boxes in the normalised frame, per polygon (for box queries).
     boxes: Vec<BvhAabb>,
-    /// The BVH is built over distinct boxes: primitive `k` of the tree stands for the
-    /// polygons `members[groups[k]..groups[k + 1]]`, all with the same box. Thousands of
+    /// The BVH is built over distinct boxes: primitive slot `k` of the tree stands for the
+    /// polygons `slotted[slots[k]..slots[k + 1]]`, all with the same box. Thousands of
     /// coincident polygons would otherwise give a tree deeper than obvhs' traversal stack
     /// (which then silently drops nodes).
-    groups: Vec<u32>,
-    members: Vec<u32>,
-    /// Per group of more than [`GROUP_TEST`] members, the exact world box of its members (m):
-    /// a segment whose part inside it lies within [`T_MARGIN`] of an end crosses none of
+    slots: Vec<u32>,
+    /// Per slot of more than [`GROUP_TEST`] polygons, the exact world box of its polygons
+    /// (m): a segment whose part inside it lies within [`T_MARGIN`] of an end crosses none of
     /// them, so thousands of coincident polygons cost one test, not thousands.
-    group_boxes: Vec<(DVec3, DVec3)>,
+    slot_boxes: Vec<(DVec3, DVec3)>,
     /// Grids for rays along the directions of the scene's sources (see
     /// [`ObvhsVisibility::with_directions`]).
     directional: Vec<DirectionalGrid>,
@@ -125,7 +126,7 @@ pub struct ObvhsVisibility {
 impl fmt::Debug for ObvhsVisibility {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("ObvhsVisibility")
-            .field("polygons", &self.triangles.len())
+            .field("polygons", &self.place.len())
             .field("centre", &self.centre)
             .field("inv_scale", &self.inv_scale)
             .finish()
@@ -164,12 +165,11 @@ impl ObvhsVisibility {
         if corners.is_empty() {
             return Ok(ObvhsVisibility {
                 bvh: None,
-                triangles: Vec::new(),
-                counts,
+                slotted: Vec::new(),
+                place: Vec::new(),
                 boxes: Vec::new(),
-                groups: vec![0],
-                members: Vec::new(),
-                group_boxes: Vec::new(),
+                slots: vec![0],
+                slot_boxes: Vec::new(),
                 directional: Vec::new(),
                 centre: Vec3::ZERO,
                 inv_scale: 1.0,
@@ -214,7 +214,7 @@ impl ObvhsVisibility {
             members.push(i);
         }
         groups.push(members.len() as u32);
-        let group_boxes = groups
+        let group_boxes: Vec<(DVec3, DVec3)> = groups
             .windows(2)
             .map(|w| {
                 let (mut lo, mut hi) =
@@ -236,21 +236,41 @@ impl ObvhsVisibility {
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
-        let triangles = corners
+        // The polygons in the order of the tree's primitive slots (each group once; any the
+        // tree did not take go last, reachable by id only).
+        let (mut order, mut slots, mut slot_boxes) = (Vec::new(), vec![0u32], Vec::new());
+        let mut placed = vec![false; corners.len()];
+        for &g in &bvh.primitive_indices {
+            let g = g as usize;
+            for &id in &members[groups[g] as usize..groups[g + 1] as usize] {
+                order.push(id);
+                placed[id as usize] = true;
+            }
+            slots.push(order.len() as u32);
+            slot_boxes.push(group_boxes[g]);
+        }
+        order.extend((0..corners.len() as u32).filter(|&id| !placed[id as usize]));
+        let mut place = vec![u32::MAX; corners.len()];
+        for (at, &id) in order.iter().enumerate() {
+            if place[id as usize] == u32::MAX {
+                place[id as usize] = at as u32;
+            }
+        }
+        let slotted = order
             .iter()
-            .map(|c| {
-                let [a, b, cc, d] = c.map(|v| v.as_dvec3());
-                [Prepared::new(a, b, cc), Prepared::new(a, cc, d)]
+            .map(|&id| Slotted {
+                corners: corners[id as usize],
+                id,
+                quad: counts[id as usize] == 4,
             })
             .collect();
         Ok(ObvhsVisibility {
             bvh: Some(bvh),
-            triangles,
-            counts,
+            slotted,
+            place,
             boxes,
-            groups,
-            members,
-            group_boxes,
+            slots,
+            slot_boxes,
             directional: Vec::new(),
             centre,
             inv_scale,
@@ -290,16 +310,15 @@ impl ObvhsVisibility {
         self.directional.iter().map(DirectionalGrid::bytes).sum()
     }
 
-    /// Whether the segment `o + t d` can cross a member of group `g` at
-    /// `T_MARGIN < t < 1 - T_MARGIN` (always true for small groups, which are tested
-    /// member by member anyway).
+    /// Whether the segment `o + t d` can cross a polygon of slot `k` at
+    /// `T_MARGIN < t < 1 - T_MARGIN` (always true for small slots, which are tested
+    /// polygon by polygon anyway).
     #[inline]
-    fn group_reachable(&self, g: u32, o: DVec3, d: DVec3) -> bool {
-        let g = g as usize;
-        if self.groups[g + 1] - self.groups[g] <= GROUP_TEST {
+    fn slot_reachable(&self, k: usize, o: DVec3, d: DVec3) -> bool {
+        if self.slots[k + 1] - self.slots[k] <= GROUP_TEST {
             return true;
         }
-        let (lo, hi) = self.group_boxes[g];
+        let (lo, hi) = self.slot_boxes[k];
         let m = 0.5 * T_MARGIN as f64;
         let (mut t0, mut t1) = (m, 1.0 - m);
         for k in 0..3 {
@@ -318,42 +337,30 @@ impl ObvhsVisibility {
 
     /// Number of polygons.
     pub fn len(&self) -> usize {
-        self.counts.len()
+        self.place.len()
     }
 
     /// True when there are no polygons (nothing ever blocks).
     pub fn is_empty(&self) -> bool {
-        self.counts.is_empty()
+        self.place.is_empty()
     }
 
-    /// True when polygon `id` crosses the open segment `o + t d`, `T_MARGIN < t < 1 - T_MARGIN`.
-    /// The polygons that tree primitive `g` stands for (see `groups`).
+    /// The polygons that tree primitive slot `k` stands for (see `slots`).
     #[inline]
-    fn group(&self, g: u32) -> &[u32] {
-        let g = g as usize;
-        &self.members[self.groups[g] as usize..self.groups[g + 1] as usize]
+    fn slot(&self, k: usize) -> &[Slotted] {
+        &self.slotted[self.slots[k] as usize..self.slots[k + 1] as usize]
     }
 
     /// The nearest crossing of polygon `id` by the segment `o + t d`, if any.
     #[inline]
     fn crossing_of(&self, id: usize, o: DVec3, d: DVec3) -> Option<f64> {
-        let t = &self.triangles[id];
-        let a = t[0].crossing(o, d);
-        let b = if self.counts[id] == 4 {
-            t[1].crossing(o, d)
-        } else {
-            None
-        };
-        match (a, b) {
-            (Some(x), Some(y)) => Some(x.min(y)),
-            (x, y) => x.or(y),
-        }
+        self.slotted[self.place[id] as usize].crossing(o, d)
     }
 
+    /// True when polygon `id` crosses the open segment `o + t d`, `T_MARGIN < t < 1 - T_MARGIN`.
     #[inline]
     fn blocks(&self, id: usize, o: DVec3, d: DVec3) -> bool {
-        let t = &self.triangles[id];
-        t[0].crosses(o, d) || (self.counts[id] == 4 && t[1].crosses(o, d))
+        self.slotted[self.place[id] as usize].crosses(o, d)
     }
 
     /// Writes into `out` (cleared first, ascending) every polygon other than `skip` whose box
@@ -381,10 +388,9 @@ impl ObvhsVisibility {
             state,
             node.intersect_aabb(&query, state.oct_inv4),
             {
-                let g = bvh.primitive_indices[state.primitive_id as usize];
-                for &id in self.group(g) {
-                    if !skip.contains(&id) && query.intersect_aabb(&self.boxes[id as usize]) {
-                        out.push(id);
+                for p in self.slot(state.primitive_id as usize) {
+                    if !skip.contains(&p.id) && query.intersect_aabb(&self.boxes[p.id as usize]) {
+                        out.push(p.id);
                     }
                 }
             }
@@ -411,6 +417,50 @@ fn inv_power_of_two(half: f32) -> f32 {
     }
     let e = half.log2().ceil().clamp(-120.0, 120.0);
     2f32.powi(-(e as i32))
+}
+
+/// A polygon for the exact segment test: its corners as given (the triangles `a b c` and,
+/// for quads, `a c d` are prepared in f64 when tested: four times less memory to read than
+/// keeping them prepared, and memory is what a ray waits for in a large scene) and its id.
+#[derive(Clone, Copy, Debug)]
+struct Slotted {
+    corners: [Vec3; 4],
+    id: u32,
+    quad: bool,
+}
+
+impl Slotted {
+    /// Triangle `k` (0: `a b c`, 1: `a c d`), prepared.
+    #[inline]
+    fn triangle(&self, k: usize) -> Prepared {
+        let [a, b, c, d] = self.corners.map(|v| v.as_dvec3());
+        if k == 0 {
+            Prepared::new(a, b, c)
+        } else {
+            Prepared::new(a, c, d)
+        }
+    }
+
+    /// The nearest crossing by the segment `o + t d`, if any (see [`Prepared::crossing`]).
+    #[inline]
+    fn crossing(&self, o: DVec3, d: DVec3) -> Option<f64> {
+        let a = self.triangle(0).crossing(o, d);
+        let b = if self.quad {
+            self.triangle(1).crossing(o, d)
+        } else {
+            None
+        };
+        match (a, b) {
+            (Some(x), Some(y)) => Some(x.min(y)),
+            (x, y) => x.or(y),
+        }
+    }
+
+    /// Whether the segment `o + t d` crosses it (see [`Prepared::crosses`]).
+    #[inline]
+    fn crosses(&self, o: DVec3, d: DVec3) -> bool {
+        self.triangle(0).crosses(o, d) || (self.quad && self.triangle(1).crosses(o, d))
+    }
 }
 
 /// A triangle prepared for the exact segment test, in f64: a corner, the unnormalised
@@ -515,12 +565,11 @@ impl Visibility for ObvhsVisibility {
         );
         let (o, dd) = (from.as_dvec3(), d.as_dvec3());
         let clear = bvh.ray_traverse_miss(ray, |_, k| {
-            let g = bvh.primitive_indices[k];
-            let blocked = self.group_reachable(g, o, dd)
+            let blocked = self.slot_reachable(k, o, dd)
                 && self
-                    .group(g)
+                    .slot(k)
                     .iter()
-                    .any(|&id| id != skip[0] && id != skip[1] && self.blocks(id as usize, o, dd));
+                    .any(|p| p.id != skip[0] && p.id != skip[1] && p.crosses(o, dd));
             if blocked { 0.0 } else { f32::INFINITY }
         });
         if clear { 1.0 } else { 0.0 }
@@ -566,15 +615,15 @@ impl Visibility for ObvhsVisibility {
         let mut hit = obvhs::ray::RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |_, k| {
             let mut nearest = f32::INFINITY;
-            let g = bvh.primitive_indices[k];
-            if !self.group_reachable(g, o, dd) {
+            if !self.slot_reachable(k, o, dd) {
                 return nearest;
             }
-            for &id in self.group(g) {
+            for p in self.slot(k) {
+                let id = p.id;
                 if id == skip[0] || id == skip[1] {
                     continue;
                 }
-                if let Some(t) = self.crossing_of(id as usize, o, dd) {
+                if let Some(t) = p.crossing(o, dd) {
                     if best.is_none_or(|(bid, bt)| t < bt || (t == bt && id < bid)) {
                         best = Some((id, t));
                     }
