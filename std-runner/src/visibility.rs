@@ -283,12 +283,16 @@ impl ObvhsVisibility {
     /// ([`Visibility::transmittance_towards`]) then test the few polygons of one cell
     /// instead of walking the BVH, with the same exact test and so the same answers; rays
     /// along other directions walk the BVH. `polygons` are those given to
-    /// [`ObvhsVisibility::new`].
+    /// [`ObvhsVisibility::new`] (a list of another length adds no grid).
     pub fn with_directions<P: AsRef<[Vec3]>>(
         mut self,
         polygons: &[P],
         directions: &[Vec3],
     ) -> Self {
+        if polygons.len() != self.len() {
+            // Not the polygons the caster was built over: no grid rather than wrong ids.
+            return self;
+        }
         let budget = (DIRECTIONAL_BYTES_PER_POLYGON * polygons.len()).max(16 << 20);
         for &d in directions {
             if self.directional.iter().any(|g| g.runs_along(d)) {

@@ -433,6 +433,11 @@ fn directional_grids_stay_within_their_memory() {
         .unwrap()
         .with_directions(&polys, &suns);
     let budget = (DIRECTIONAL_BYTES_PER_POLYGON * n).max(16 << 20);
+    // Other polygons than the caster's: no grid, the BVH answers.
+    let other = ObvhsVisibility::new(&polys)
+        .unwrap()
+        .with_directions(&polys[..10], &suns);
+    assert_eq!(other.directional_bytes(), 0);
     assert!(vis.directional_bytes() > 0 && vis.directional_bytes() <= budget);
     // Under the stack: blocked; above it: clear; in between, blocked by what lies above.
     for (z, expect) in [(-1.0f32, 0.0f32), (40.0, 1.0), (15.0, 0.0)] {
