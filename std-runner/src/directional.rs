@@ -46,7 +46,8 @@ pub struct DirectionalGrid {
 
 impl DirectionalGrid {
     /// Builds the grid of `polygons` (world corners) along the unit direction `towards`;
-    /// `None` when the direction is not finite and non-zero or there is nothing to hold.
+    /// `None` when the direction is not finite and non-zero, a corner is not finite, or there
+    /// is nothing to hold.
     pub fn new<P: AsRef<[Vec3]>>(polygons: &[P], towards: Vec3) -> Option<DirectionalGrid> {
         let t = towards.as_dvec3().normalize_or_zero();
         if t == DVec3::ZERO || !t.is_finite() || polygons.is_empty() {
