@@ -2,7 +2,8 @@
 //! SCENE [RAYS]` casts RAYS (default 2,000,000) segments from the centres of polygons drawn
 //! at random, in cosine-distributed directions about +z, 100 m long, in random order (no
 //! coherence between one ray and the next, unlike the solver's), one thread, and prints the
-//! time per ray of the any-hit test (`transmittance`) and of the nearest hit (`first_hit`).
+//! time per ray of the any-hit test (`transmittance`) and of the nearest hit (`first_hit`),
+//! and the bytes the grids of the scene's suns take (see `ObvhsVisibility::with_directions`).
 
 use glam::Vec3;
 use hirad::solve::world_polygons;
@@ -24,11 +25,16 @@ fn main() {
         .scene;
     let polys = world_polygons(&scene);
     let t = Instant::now();
-    let vis = ObvhsVisibility::new(&polys).expect("visibility");
+    let suns: Vec<Vec3> = scene.suns.iter().map(|l| l.towards).collect();
+    let vis = ObvhsVisibility::new(&polys)
+        .expect("visibility")
+        .with_directions(&polys, &suns);
     println!(
-        "{} polygons, built in {:.2} s",
+        "{} polygons, built in {:.2} s; {} sun grid bytes ({:.1} per polygon)",
         polys.len(),
-        t.elapsed().as_secs_f64()
+        t.elapsed().as_secs_f64(),
+        vis.directional_bytes(),
+        vis.directional_bytes() as f64 / polys.len() as f64
     );
     let segments: Vec<(Vec3, Vec3, u32)> = (0..n)
         .map(|i| {

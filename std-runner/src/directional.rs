@@ -194,12 +194,11 @@ impl DirectionalGrid {
         (t - self.towards).length_squared() < 1e-10
     }
 
-    /// Calls `blocks` on every polygon that the segment `from..to` can cross (a superset),
-    /// nearest the source first, until it returns true; `None` when the segment does not run
-    /// along this grid's direction closely enough to be answered here.
+    /// Calls `blocks` on every polygon that the segment `o + t w`, `0 < t < 1`, can cross (a
+    /// superset), nearest the source first, until it returns true; `None` when the segment
+    /// does not run along this grid's direction closely enough to be answered here.
     #[inline]
-    pub fn any(&self, from: Vec3, to: Vec3, mut blocks: impl FnMut(u32) -> bool) -> Option<bool> {
-        let (o, w) = (from.as_dvec3(), (to - from).as_dvec3());
+    pub fn any(&self, o: DVec3, w: DVec3, mut blocks: impl FnMut(u32) -> bool) -> Option<bool> {
         let along = w.dot(self.towards);
         if along.is_nan()
             || along <= 0.0
@@ -263,7 +262,7 @@ mod tests {
     /// The candidates `any` offers, collected (it is told nothing blocks).
     fn offered(g: &DirectionalGrid, from: Vec3, to: Vec3) -> Option<Vec<u32>> {
         let mut seen = Vec::new();
-        g.any(from, to, |id| {
+        g.any(from.as_dvec3(), (to - from).as_dvec3(), |id| {
             seen.push(id);
             false
         })
@@ -297,7 +296,7 @@ mod tests {
         assert_eq!(offered(&g, from, from), None);
         // A blocking answer stops the search.
         let mut calls = 0;
-        let hit = g.any(from, from + Vec3::Z * 10.0, |_| {
+        let hit = g.any(from.as_dvec3(), DVec3::Z * 10.0, |_| {
             calls += 1;
             true
         });

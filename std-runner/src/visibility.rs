@@ -43,11 +43,11 @@ const BOX_PAD: f32 = 1e-5;
 const RAY_STRETCH: f32 = 16.0;
 
 /// Most bytes per polygon that the directional grids may hold together (one grid takes
-/// about 75 under a maize canopy: a few suns fit, a sky of a hundred directions would not).
+/// 75 to 100 on maize canopies: a few suns fit, a sky of a hundred directions would not).
 pub const DIRECTIONAL_BYTES_PER_POLYGON: usize = 512;
 
 /// Groups of coincident polygons larger than this are first tested as a whole (see
-/// `ObvhsVisibility::group_boxes`).
+/// `ObvhsVisibility::slot_boxes`).
 const GROUP_TEST: u32 = 4;
 
 /// Why a polygon list cannot be used for visibility.
@@ -239,21 +239,22 @@ impl ObvhsVisibility {
         // The polygons in the order of the tree's primitive slots (each group once; any the
         // tree did not take go last, reachable by id only).
         let (mut order, mut slots, mut slot_boxes) = (Vec::new(), vec![0u32], Vec::new());
-        let mut placed = vec![false; corners.len()];
+        let mut place = vec![u32::MAX; corners.len()];
         for &g in &bvh.primitive_indices {
             let g = g as usize;
             for &id in &members[groups[g] as usize..groups[g + 1] as usize] {
+                if place[id as usize] == u32::MAX {
+                    place[id as usize] = order.len() as u32;
+                }
                 order.push(id);
-                placed[id as usize] = true;
             }
             slots.push(order.len() as u32);
             slot_boxes.push(group_boxes[g]);
         }
-        order.extend((0..corners.len() as u32).filter(|&id| !placed[id as usize]));
-        let mut place = vec![u32::MAX; corners.len()];
-        for (at, &id) in order.iter().enumerate() {
+        for id in 0..corners.len() as u32 {
             if place[id as usize] == u32::MAX {
-                place[id as usize] = at as u32;
+                place[id as usize] = order.len() as u32;
+                order.push(id);
             }
         }
         let slotted = order
@@ -584,7 +585,7 @@ impl Visibility for ObvhsVisibility {
         if let Some(g) = self.directional.iter().find(|g| g.runs_along(towards)) {
             if from.is_finite() && to.is_finite() {
                 let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
-                let hit = g.any(from, to, |id| {
+                let hit = g.any(o, d, |id| {
                     id != skip[0] && id != skip[1] && self.blocks(id as usize, o, d)
                 });
                 if let Some(blocked) = hit {

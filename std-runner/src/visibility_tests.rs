@@ -371,7 +371,7 @@ fn rays_along_a_source_direction_get_the_bvh_answers() {
             .with_directions(&polys, &dirs);
         assert!(vis.directional_bytes() > 0);
         let mut rng = Rng(seed ^ 0x51, 7);
-        let (mut blocked, mut total) = (0, 0);
+        let (mut blocked, mut total, mut compared) = (0, 0, 0);
         for (k, &d) in dirs.iter().enumerate() {
             for j in 0..240u32 {
                 let p = &polys[(j as usize * 13 + k) % polys.len()];
@@ -390,6 +390,11 @@ fn rays_along_a_source_direction_get_the_bvh_answers() {
                 let fast = vis.transmittance_towards(from, to, d, skip);
                 assert_eq!(fast, plain.transmittance(from, to, skip), "{seed} {k} {j}");
                 assert_eq!(fast, vis.brute_force(from, to, skip), "{seed} {k} {j}");
+                // And the independent formulation, where the case is not at a boundary.
+                if let Some(r) = reference(&polys, from, to, skip) {
+                    assert_eq!(fast, r, "{seed} {k} {j} reference");
+                    compared += 1;
+                }
                 // A segment that does not run along the direction it names is cast.
                 let bent = to + Vec3::new(0.3, -0.2, 0.1) * size;
                 assert_eq!(
@@ -401,11 +406,12 @@ fn rays_along_a_source_direction_get_the_bvh_answers() {
                 total += 1;
             }
         }
-        // Both outcomes occur often.
+        // Both outcomes occur often; most cases are away from boundaries.
         assert!(
             blocked > total / 10 && blocked < total * 9 / 10,
             "{blocked} of {total}"
         );
+        assert!(compared > total / 2, "{compared} of {total}");
     }
 }
 

@@ -59,9 +59,7 @@ impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
     fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
         match self.vis {
             Vis::External(v) => v.transmittance_towards(from, to, towards, skip),
-            Vis::Internal(bvh) => {
-                BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip)
-            }
+            Vis::Internal(_) => self.transmittance(from, to, skip),
         }
     }
 
