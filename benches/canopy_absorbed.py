@@ -31,17 +31,29 @@ def materials(path):
     return out
 
 
+def column(fields, quantity, band):
+    """The band-th column of `quantity` ('irr', 'irr_back', ...): tables name bands by index
+    (`irr_0`) or by name with units (`irr_par_W_m2`), in band order either way."""
+    cols = [c for c in fields if c.startswith(quantity + '_')
+            and (quantity.endswith('_back') or not c.startswith(quantity + '_back_'))]
+    return cols[band]
+
+
 def absorbed(path, mats, kinds, band):
-    rows = list(csv.DictReader(open(path)))
+    reader = csv.DictReader(open(path))
+    rows = list(reader)
+    area = 'area_m2' if 'area_m2' in reader.fieldnames else 'area'
+    front, back_col = column(reader.fieldnames, 'irr', band), None
     out = []
     for i, row in enumerate(rows):
         m = mats[kinds[i]]
         rho = m.get('rho', [0] * 8)[band]
         tau = m.get('tau', [0] * 8)[band]
-        a = float(row['area']) * (1 - rho - tau) * float(row['irr_%d' % band])
+        a = float(row[area]) * (1 - rho - tau) * float(row[front])
         if 'back_rho' in m or 'tau' in m:
             back = m.get('back_rho', m.get('rho'))[band]
-            a += float(row['area']) * (1 - back - tau) * float(row['irr_back_%d' % band])
+            back_col = back_col or column(reader.fieldnames, 'irr_back', band)
+            a += float(row[area]) * (1 - back - tau) * float(row[back_col] or 0)
         out.append(a)
     return out
 

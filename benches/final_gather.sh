@@ -39,7 +39,7 @@ for g in "--final-rays 0" ""; do
 import csv, sys
 ex = list(csv.DictReader(open(sys.argv[1]))); hr = list(csv.DictReader(open(sys.argv[2])))
 n = len(ex)
-print('worst of 48 leaf sides and bands %+.1f%%' % max((100 * (float(hr[i][c]) / float(ex[i][c]) - 1) for i in range(n - 12, n) for c in ['rad_0', 'rad_1', 'rad_back_0', 'rad_back_1']), key=abs))
+print('worst of 48 leaf sides and bands %+.1f%%' % max((100 * (float(hr[i][c]) / float(ex[i][[k for k in ex[0] if k.startswith('rad_')][[k for k in hr[0] if k.startswith('rad_')].index(c)]]) - 1) for i in range(n - 12, n) for c in [k for k in hr[0] if k.startswith('rad_')]), key=abs))
 " "$W/leaves_exact.csv" "$W/lv.csv")
   echo "leaves_cluster [${g:-defaults}] $t | $w"
 done

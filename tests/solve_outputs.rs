@@ -276,11 +276,12 @@ fn two_sided_scene_with_default_camera() {
 
     let text = std::fs::read_to_string(&csv).unwrap();
     assert!(text.starts_with(
-        "id,area,rad_0,rad_1,irr_0,irr_1,rad_back_0,rad_back_1,irr_back_0,irr_back_1\n"
+        "id,area_m2,rad_0_W_m2,rad_1_W_m2,irr_0_W_m2,irr_1_W_m2,rad_back_0_W_m2,rad_back_1_W_m2,irr_back_0_W_m2,irr_back_1_W_m2\n"
     ));
     let table = read_results(text.as_bytes()).unwrap();
     assert!(table.two_sided);
-    // One-sided polygons have zeros on the back, two-sided ones their back values.
+    // One-sided polygons have empty back fields (read as zeros), two-sided ones their back
+    // values.
     let mut memory = ResultsTable::new(bands, true);
     stream(&scene, &mut memory, 1.0);
     assert_eq!(table, memory);

@@ -121,7 +121,10 @@ fn reference_error_and_stats() {
         s(&exact),
     ]);
     let table = std::fs::read_to_string(&exact).unwrap();
-    assert!(table.starts_with("id,area,rad_0,irr_0\n"), "{table}");
+    assert!(
+        table.starts_with("id,area_m2,rad_0_W_m2,irr_0_W_m2,material,group\n"),
+        "{table}"
+    );
     let stats = d.join("stats.json");
     let out = ok(&[
         "solve",
@@ -295,7 +298,16 @@ fn reference_names_the_five_worst_polygons() {
         .lines()
         .map(|l| l.split(',').map(String::from).collect())
         .collect();
-    assert_eq!(&rows[0][..5], ["id", "area", "rad_0", "rad_1", "rad_2"]);
+    assert_eq!(
+        &rows[0][..5],
+        [
+            "id",
+            "area_m2",
+            "rad_red_W_m2",
+            "rad_green_W_m2",
+            "rad_blue_W_m2"
+        ]
+    );
     // (id, band, relative error of the result): the sixth is not among the five, and the
     // seventh is a dark column (below 0.1% of the largest radiosity, the light's) whose
     // relative error does not count.

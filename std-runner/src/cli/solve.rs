@@ -191,7 +191,9 @@ pub fn run(a: Args) -> Result<()> {
         bail!("{}: the scene has no polygons", a.scene.display());
     }
     let bands = scene.bands as usize;
-    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
+    // Material and group of every row; back-side columns only when a polygon is two-sided.
+    let labels = output::RowLabels::of(scene);
+    let two_sided = labels.uses_material(|m| scene.materials[m].data.two_sided);
 
     // Outputs, checked before the (possibly long) solve: writable, none of them a file the
     // run reads, no two the same.
@@ -296,11 +298,14 @@ pub fn run(a: Args) -> Result<()> {
         outputs.image = Some(sink);
     }
     if let Some(path) = &a.results {
-        outputs.results = Some(ResultsFile::create_with_faces(
+        outputs.results = Some(ResultsFile::create_with_layout(
             path,
-            bands,
-            two_sided,
-            loaded.faces.clone(),
+            output::TableLayout {
+                labels: output::columns::band_labels(bands, &scene.band_names),
+                two_sided,
+                faces: loaded.faces.clone(),
+                rows: Some(labels),
+            },
         )?);
     }
 

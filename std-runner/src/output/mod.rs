@@ -6,6 +6,7 @@
 //! image radiance.
 
 pub mod camera;
+pub mod columns;
 pub mod exr_file;
 pub mod frame;
 pub mod image;
@@ -16,6 +17,7 @@ pub mod raster;
 pub mod reference;
 pub mod results;
 pub mod results_read;
+pub mod row_labels;
 pub mod stats;
 pub mod view;
 
@@ -31,8 +33,9 @@ pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png};
 pub use progress::Progress;
 pub use raster::Rasterizer;
 pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compare};
-pub use results::{ResultsFile, ResultsTable, ResultsWriter};
+pub use results::{ResultsFile, ResultsTable, ResultsWriter, TableLayout};
 pub use results_read::{TableError, read_results, read_results_file};
+pub use row_labels::RowLabels;
 pub use stats::{BandPower, PhaseTime, RaysByPhase, SolveReport};
 
 #[cfg(test)]

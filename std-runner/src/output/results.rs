@@ -1,14 +1,18 @@
 //! The per-polygon results table: one CSV row per input polygon in global-id order, streamed
 //! by a [`Sink`] as the solver finishes polygons, and the same table held in memory.
 //!
-//! Columns: `id,area,rad_0..rad_{n-1},irr_0..irr_{n-1}` for the front side, then
-//! `rad_back_0..`, `irr_back_0..` only when the scene has two-sided materials (one-sided
-//! polygons get 0 there), then `face` only when the scene came from an OBJ file: the number
-//! of the `f` statement the polygon came from (1-based, as modelling programs number faces;
-//! the pieces of a split face share it, a skipped face has no row). Units: m^2 for the area,
-//! W/m^2 for radiosity and irradiance.
+//! Columns (see [`super::columns`]): `id,area_m2`, the radiosity and irradiance of the front
+//! side per band (`rad_par_W_m2`, ..., `irr_par_W_m2`, ...), then `rad_back_...` and
+//! `irr_back_...` only when some polygon of the scene is two-sided (a one-sided polygon leaves
+//! them empty: it has no back), then `face` only when the scene came from an OBJ file (the
+//! number of the `f` statement the polygon came from, 1-based, as modelling programs number
+//! faces; the pieces of a split face share it, a skipped face has no row), then `material`
+//! and `group` (the cluster path) when the writer is given them ([`RowLabels`]). Units are in
+//! the names: m^2 for the area, W/m^2 for radiosity and irradiance.
 //! Numbers are written with Rust's shortest round-trip form, so reading gives the same bits.
 
+use super::columns::{band_labels, numeric_header, push_field};
+use super::row_labels::RowLabels;
 use crate::files::{persist, temp_beside};
 use anyhow::anyhow;
 use hirad_core::limits::MAX_BANDS;
@@ -17,23 +21,52 @@ use std::fmt::Write as _;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// The header line (without its newline) of a table with `bands` bands.
+/// The header line (without its newline) of a table with `bands` bands labelled by index.
 pub fn header(bands: usize, two_sided: bool) -> String {
-    let mut h = String::from("id,area");
-    let sides: &[&str] = if two_sided { &["", "_back"] } else { &[""] };
-    for side in sides {
-        for quantity in ["rad", "irr"] {
-            for b in 0..bands {
-                let _ = write!(h, ",{quantity}{side}_{b}");
-            }
-        }
-    }
-    h
+    numeric_header(&band_labels(bands, &[]), two_sided).join(",")
 }
 
-/// Number of fields of a row.
+/// Number of numeric fields of a row (id, area, radiosity and irradiance).
 pub fn field_count(bands: usize, two_sided: bool) -> usize {
     2 + bands * if two_sided { 4 } else { 2 }
+}
+
+/// What a table's columns are: its band labels and sides, and the optional columns.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TableLayout {
+    /// One label per band (see [`band_labels`]).
+    pub labels: Vec<String>,
+    /// Back-side columns (some polygon is two-sided).
+    pub two_sided: bool,
+    /// The `face` column, by id (the scene's OBJ face numbers).
+    pub faces: Option<Vec<u64>>,
+    /// The `material` and `group` columns.
+    pub rows: Option<RowLabels>,
+}
+
+impl TableLayout {
+    /// Bands labelled by index, no optional columns.
+    pub fn plain(bands: usize, two_sided: bool) -> Self {
+        TableLayout {
+            labels: band_labels(bands, &[]),
+            two_sided,
+            faces: None,
+            rows: None,
+        }
+    }
+
+    /// The header line (without its newline).
+    pub fn header(&self) -> String {
+        let mut h = numeric_header(&self.labels, self.two_sided);
+        if self.faces.is_some() {
+            h.push("face".into());
+        }
+        if self.rows.is_some() {
+            h.push("material".into());
+            h.push("group".into());
+        }
+        h.join(",")
+    }
 }
 
 /// A whole results table in memory (rows in increasing id order).
@@ -189,45 +222,32 @@ fn check_polygon(
 #[derive(Debug)]
 pub struct ResultsWriter<W: Write> {
     out: W,
-    bands: usize,
-    two_sided: bool,
-    /// The `face` column, by id.
-    faces: Option<Vec<u64>>,
+    layout: TableLayout,
     last: Option<u64>,
     line: String,
 }
 
 impl<W: Write> ResultsWriter<W> {
-    /// Writes the header for `bands` bands (1..=[`MAX_BANDS`]), with back-side columns when
-    /// `two_sided` (the scene has two-sided materials).
+    /// Writes the header for `bands` bands (1..=[`MAX_BANDS`]) labelled by index, with
+    /// back-side columns when `two_sided`.
     pub fn new(out: W, bands: usize, two_sided: bool) -> io::Result<Self> {
-        Self::with_faces(out, bands, two_sided, None)
+        Self::with_layout(out, TableLayout::plain(bands, two_sided))
     }
 
-    /// [`ResultsWriter::new`] with the `face` column: `faces[id]` for the row of polygon
-    /// `id` (the scene's OBJ face numbers).
-    pub fn with_faces(
-        mut out: W,
-        bands: usize,
-        two_sided: bool,
-        faces: Option<Vec<u64>>,
-    ) -> io::Result<Self> {
+    /// Writes the header of `layout` (1..=[`MAX_BANDS`] bands).
+    pub fn with_layout(mut out: W, layout: TableLayout) -> io::Result<Self> {
+        let bands = layout.labels.len();
         if !(1..=MAX_BANDS).contains(&bands) {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
                 format!("a results table has 1 to {MAX_BANDS} bands, not {bands}"),
             ));
         }
-        out.write_all(header(bands, two_sided).as_bytes())?;
-        if faces.is_some() {
-            out.write_all(b",face")?;
-        }
+        out.write_all(layout.header().as_bytes())?;
         out.write_all(b"\n")?;
         Ok(ResultsWriter {
             out,
-            bands,
-            two_sided,
-            faces,
+            layout,
             last: None,
             line: String::new(),
         })
@@ -244,18 +264,28 @@ impl<W: Write> Sink for ResultsWriter<W> {
     type Error = io::Error;
 
     fn polygon(&mut self, p: &PolygonResult<'_>) -> Result<(), io::Error> {
-        check_polygon(p, self.bands, self.two_sided, self.last)
+        let bands = self.layout.labels.len();
+        let two_sided = self.layout.two_sided;
+        check_polygon(p, bands, two_sided, self.last)
             .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e))?;
         self.last = Some(p.id);
+        let invalid = |what: &str| {
+            io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("polygon {} has no {what}", p.id),
+            )
+        };
         let line = &mut self.line;
         line.clear();
         let _ = write!(line, "{},{}", p.id, p.area);
-        let sides = if self.two_sided { 2 } else { 1 };
+        let sides = if two_sided { 2 } else { 1 };
         for side in 0..sides {
             for values in [p.radiosity[side], p.irradiance[side]] {
                 if values.is_empty() {
-                    for _ in 0..self.bands {
-                        line.push_str(",0");
+                    // Front values are checked present: this is the back of a one-sided
+                    // polygon, which has none.
+                    for _ in 0..bands {
+                        line.push(',');
                     }
                 } else {
                     for v in values {
@@ -264,18 +294,19 @@ impl<W: Write> Sink for ResultsWriter<W> {
                 }
             }
         }
-        if let Some(faces) = &self.faces {
-            match faces.get(p.id as usize) {
-                Some(f) => {
-                    let _ = write!(line, ",{f}");
-                }
-                None => {
-                    return Err(io::Error::new(
-                        io::ErrorKind::InvalidData,
-                        format!("polygon {} has no face number", p.id),
-                    ));
-                }
-            }
+        if let Some(faces) = &self.layout.faces {
+            let f = faces
+                .get(p.id as usize)
+                .ok_or_else(|| invalid("face number"))?;
+            let _ = write!(line, ",{f}");
+        }
+        if let Some(rows) = &self.layout.rows {
+            let m = rows.material(p.id).ok_or_else(|| invalid("material"))?;
+            let g = rows.group(p.id).ok_or_else(|| invalid("group"))?;
+            line.push(',');
+            push_field(line, m);
+            line.push(',');
+            push_field(line, g);
         }
         line.push('\n');
         self.out.write_all(line.as_bytes())
@@ -290,20 +321,16 @@ pub struct ResultsFile {
 }
 
 impl ResultsFile {
-    /// Creates the temporary file beside `path` and writes the header.
+    /// Creates the temporary file beside `path` and writes the header (bands labelled by
+    /// index, no optional columns).
     pub fn create(path: &Path, bands: usize, two_sided: bool) -> anyhow::Result<Self> {
-        Self::create_with_faces(path, bands, two_sided, None)
+        Self::create_with_layout(path, TableLayout::plain(bands, two_sided))
     }
 
-    /// [`ResultsFile::create`] with the `face` column (see [`ResultsWriter::with_faces`]).
-    pub fn create_with_faces(
-        path: &Path,
-        bands: usize,
-        two_sided: bool,
-        faces: Option<Vec<u64>>,
-    ) -> anyhow::Result<Self> {
+    /// [`ResultsFile::create`] with the columns of `layout`.
+    pub fn create_with_layout(path: &Path, layout: TableLayout) -> anyhow::Result<Self> {
         let tmp = temp_beside(path)?;
-        let writer = ResultsWriter::with_faces(BufWriter::new(tmp), bands, two_sided, faces)
+        let writer = ResultsWriter::with_layout(BufWriter::new(tmp), layout)
             .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))?;
         Ok(ResultsFile {
             path: path.to_path_buf(),

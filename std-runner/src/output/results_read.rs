@@ -1,8 +1,12 @@
 //! Reads a results table (see [`super::results`]) from untrusted bytes: every fault is
 //! refused with its line:column, nothing panics. Used for `--reference` tables, which may
-//! come from other tools.
+//! come from other tools. Columns are found by name (see [`super::columns`]), so tables of
+//! every layout hirad has written read alike: band labels by name or index, units in the
+//! names or not (`area`, `rad_0`), with or without `face`, `material` and `group`, and
+//! empty back-side fields for one-sided polygons (read as 0).
 
-use super::results::{ResultsTable, field_count, header};
+use super::columns::{Column, Field, parse_column, split_fields};
+use super::results::{ResultsTable, header};
 use hirad_core::limits::MAX_BANDS;
 use std::fmt;
 use std::path::Path;
@@ -34,20 +38,14 @@ fn fail<T>(line: u64, column: usize, message: impl Into<String>) -> Result<T, Ta
     })
 }
 
-/// A field of a line: its text and its byte offset in the line.
-struct Field<'a> {
-    text: &'a [u8],
-    at: usize,
-}
-
-fn fields(line: &[u8]) -> Vec<Field<'_>> {
-    let mut out = Vec::new();
-    let mut at = 0;
-    for text in line.split(|&c| c == b',') {
-        out.push(Field { text, at });
-        at += text.len() + 1;
-    }
-    out
+fn fields(line_no: u64, line: &[u8]) -> Result<Vec<Field<'_>>, TableError> {
+    split_fields(line).or_else(|at| {
+        fail(
+            line_no,
+            at,
+            "a quoted field must end with a quote before the next comma",
+        )
+    })
 }
 
 /// At most 40 characters of a field, for messages.
@@ -68,8 +66,9 @@ pub fn read_results_file(path: &Path) -> anyhow::Result<ResultsTable> {
 }
 
 /// Parses a whole table. Accepts `\n` or `\r\n` line ends, an optional final newline and a
-/// leading UTF-8 byte-order mark; refuses empty lines, wrong headers or field counts, numbers
-/// that are not finite f32, negative areas, and ids that are not strictly increasing.
+/// leading UTF-8 byte-order mark; refuses empty lines, unknown or missing columns, wrong
+/// field counts, numbers that are not finite f32, negative areas, and ids that are not
+/// strictly increasing.
 pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let bytes = bytes.strip_suffix(b"\n").unwrap_or(bytes);
@@ -77,23 +76,25 @@ pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
         return fail(
             1,
             0,
-            format!("empty file: expected the header `{}`", header(1, false)),
+            format!(
+                "empty file: expected a header such as `{}`",
+                header(1, false)
+            ),
         );
     }
     let mut lines = bytes.split(|&c| c == b'\n').enumerate();
-    let (mut table, with_faces) = match lines.next() {
+    let (mut table, layout) = match lines.next() {
         Some((_, h)) => read_header(strip_cr(h))?,
         None => return fail(1, 0, "empty file"),
     };
-    let values = field_count(table.bands, table.two_sided);
-    let expected = values + with_faces as usize;
+    let expected = layout.roles.len();
     for (index, raw) in lines {
         let line_no = index as u64 + 1;
         let line = strip_cr(raw);
         if line.is_empty() {
             return fail(line_no, 0, "empty line: expected a row");
         }
-        let f = fields(line);
+        let f = fields(line_no, line)?;
         if f.len() != expected {
             let column = f.get(expected).map_or(line.len(), |x| x.at);
             return fail(
@@ -102,7 +103,35 @@ pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
                 format!("expected {expected} fields, found {}", f.len()),
             );
         }
-        let id = parse_id(line_no, &f[0])?;
+        let mut values = [[[0.0f32; MAX_BANDS]; 2]; 2];
+        let (mut id, mut area) = (0u64, 0.0f32);
+        for (field, role) in f.iter().zip(&layout.roles) {
+            match *role {
+                Role::Id => id = parse_id(line_no, field)?,
+                Role::Area => {
+                    area = parse_value(line_no, field)?;
+                    if area < 0.0 {
+                        return fail(line_no, field.at, format!("negative area {area}"));
+                    }
+                }
+                Role::Flux {
+                    quantity,
+                    side,
+                    band,
+                } => {
+                    if side == 1 && field.text.is_empty() {
+                        // The back of a one-sided polygon: none.
+                        continue;
+                    }
+                    values[quantity][side][band] = parse_value(line_no, field)?;
+                }
+                // Checked like an id, not kept: a reference is matched by id.
+                Role::Face => {
+                    parse_id(line_no, field)?;
+                }
+                Role::Text => {}
+            }
+        }
         if let Some(&last) = table.ids.last() {
             if id == last {
                 return fail(line_no, 0, format!("duplicate id {id}"));
@@ -115,24 +144,13 @@ pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
                 );
             }
         }
-        let area = parse_value(line_no, &f[1])?;
-        if area < 0.0 {
-            return fail(line_no, f[1].at, format!("negative area {area}"));
-        }
         table.ids.push(id);
         table.areas.push(area);
         let bands = table.bands;
-        let [rad_front, rad_back] = &mut table.radiosity;
-        let [irr_front, irr_back] = &mut table.irradiance;
-        let groups = [rad_front, irr_front, rad_back, irr_back];
-        for (g, column) in groups.into_iter().zip(f[2..values].chunks(bands)) {
-            for field in column {
-                g.push(parse_value(line_no, field)?);
-            }
-        }
-        if with_faces {
-            // Checked like an id, not kept: a reference is matched by id.
-            parse_id(line_no, &f[values])?;
+        let sides = if table.two_sided { 2 } else { 1 };
+        for side in 0..sides {
+            table.radiosity[side].extend_from_slice(&values[0][side][..bands]);
+            table.irradiance[side].extend_from_slice(&values[1][side][..bands]);
         }
     }
     Ok(table)
@@ -142,48 +160,148 @@ fn strip_cr(line: &[u8]) -> &[u8] {
     line.strip_suffix(b"\r").unwrap_or(line)
 }
 
-/// Reads the header: `id,area`, then `2 n` (one-sided) or `4 n` (two-sided) named columns,
-/// and an optional last column `face`; returns the empty table and whether `face` is there.
-fn read_header(line: &[u8]) -> Result<(ResultsTable, bool), TableError> {
-    let all = fields(line);
-    let with_faces = all.len() > 2 && all.last().is_some_and(|x| x.text == b"face");
-    let f = &all[..all.len() - with_faces as usize];
-    let two_sided = f.iter().any(|x| x.text == b"rad_back_0");
-    let per_band = if two_sided { 4 } else { 2 };
-    let bands = f.len().saturating_sub(2) / per_band;
-    if !(1..=MAX_BANDS).contains(&bands) || f.len() != field_count(bands, two_sided) {
-        let column = f.get(2 + per_band * MAX_BANDS).map_or(line.len(), |x| x.at);
+/// What a column of a table read holds.
+#[derive(Clone, Copy, Debug)]
+enum Role {
+    Id,
+    Area,
+    Flux {
+        quantity: usize,
+        side: usize,
+        band: usize,
+    },
+    Face,
+    /// `material`, `group`: read past.
+    Text,
+}
+
+/// The roles of a table's columns, in order.
+struct Layout {
+    roles: Vec<Role>,
+}
+
+/// Reads the header: `id`, `area` (or `area_m2`), for each of 1 to [`MAX_BANDS`] bands its
+/// `rad_B` and `irr_B` (with or without `_W_m2`), the same with `_back_` for two-sided
+/// tables, and optionally `face`, `material` and `group`, each once. The bands' order is
+/// that of the front radiosity columns; every set must name the same bands.
+fn read_header(line: &[u8]) -> Result<(ResultsTable, Layout), TableError> {
+    let all = fields(1, line)?;
+    let usage = format!(
+        "expected `id`, `area_m2`, then `rad_B_W_m2` and `irr_B_W_m2` for each band B \
+         (and `rad_back_B_W_m2`, `irr_back_B_W_m2` for two-sided scenes), and optionally \
+         `face`, `material`, `group`, e.g. `{}`",
+        header(1, false)
+    );
+    let mut labels: Vec<String> = Vec::new();
+    let mut columns = Vec::with_capacity(all.len());
+    let mut seen: Vec<Column> = Vec::new();
+    for f in &all {
+        let name = std::str::from_utf8(&f.text).unwrap_or("");
+        let Some(c) = parse_column(name) else {
+            return fail(
+                1,
+                f.at,
+                format!("header: unknown column `{}`: {usage}", shown(&f.text)),
+            );
+        };
+        if seen.contains(&c) {
+            return fail(
+                1,
+                f.at,
+                format!("header: column `{}` appears twice", shown(&f.text)),
+            );
+        }
+        if let Column::Flux {
+            quantity: 0,
+            side: 0,
+            label,
+        } = &c
+        {
+            labels.push(label.clone());
+        }
+        seen.push(c.clone());
+        columns.push((c, f.at));
+    }
+    let bands = labels.len();
+    if !(1..=MAX_BANDS).contains(&bands) {
         return fail(
             1,
-            column,
+            line.len(),
             format!(
-                "header has {} columns: expected `id,area`, then rad_K and irr_K for each \
-                 of 1 to {MAX_BANDS} bands K (and rad_back_K, irr_back_K for two-sided scenes), \
-                 and an optional last column `face`",
-                f.len()
+                "header has radiosity columns for {bands} bands, expected 1 to {MAX_BANDS}: {usage}"
             ),
         );
     }
-    let want = header(bands, two_sided);
-    for (field, name) in f.iter().zip(want.split(',')) {
-        if field.text != name.as_bytes() {
-            return fail(
-                1,
-                field.at,
-                format!(
-                    "header: expected column `{name}`, found `{}`",
-                    shown(field.text)
-                ),
-            );
+    let two_sided = seen
+        .iter()
+        .any(|c| matches!(c, Column::Flux { side: 1, .. }));
+    for required in [Column::Id, Column::Area] {
+        if !seen.contains(&required) {
+            let name = if required == Column::Id {
+                "id"
+            } else {
+                "area_m2"
+            };
+            return fail(1, 0, format!("header: no `{name}` column: {usage}"));
         }
     }
-    Ok((ResultsTable::new(bands, two_sided), with_faces))
+    let mut roles = Vec::with_capacity(columns.len());
+    for (c, at) in &columns {
+        roles.push(match c {
+            Column::Id => Role::Id,
+            Column::Area => Role::Area,
+            Column::Face => Role::Face,
+            Column::Material | Column::Group => Role::Text,
+            Column::Flux {
+                quantity,
+                side,
+                label,
+            } => match labels.iter().position(|l| l == label) {
+                Some(band) => Role::Flux {
+                    quantity: *quantity,
+                    side: *side,
+                    band,
+                },
+                None => {
+                    return fail(
+                        1,
+                        *at,
+                        format!(
+                            "header: band `{label}` has no front radiosity column (the bands are {})",
+                            labels.join(", ")
+                        ),
+                    );
+                }
+            },
+        });
+    }
+    // Every band of every set present.
+    let sides = if two_sided { 2 } else { 1 };
+    for side in 0..sides {
+        for quantity in 0..2 {
+            for (band, label) in labels.iter().enumerate() {
+                let found = roles.iter().any(|r| {
+                    matches!(*r, Role::Flux { quantity: q, side: s, band: b } if q == quantity && s == side && b == band)
+                });
+                if !found {
+                    let q = ["rad", "irr"][quantity];
+                    let sd = ["", "_back"][side];
+                    return fail(
+                        1,
+                        line.len(),
+                        format!("header: no column `{q}{sd}_{label}_W_m2`: {usage}"),
+                    );
+                }
+            }
+        }
+    }
+    Ok((ResultsTable::new(bands, two_sided), Layout { roles }))
 }
 
 fn parse_id(line: u64, f: &Field<'_>) -> Result<u64, TableError> {
     let ok = !f.text.is_empty() && f.text.iter().all(u8::is_ascii_digit);
     let value = ok
-        .then(|| std::str::from_utf8(f.text).ok()?.parse::<u64>().ok())
+        .then(|| std::str::from_utf8(&f.text).ok()?.parse::<u64>().ok())
         .flatten();
     match value {
         Some(v) => Ok(v),
@@ -192,7 +310,7 @@ fn parse_id(line: u64, f: &Field<'_>) -> Result<u64, TableError> {
             f.at,
             format!(
                 "`{}` is not a polygon id (an integer from 0 to {})",
-                shown(f.text),
+                shown(&f.text),
                 u64::MAX
             ),
         ),
@@ -206,19 +324,19 @@ fn parse_value(line: u64, f: &Field<'_>) -> Result<f32, TableError> {
             .iter()
             .all(|c| c.is_ascii_digit() || b"+-.eE".contains(c));
     let parsed = decimal
-        .then(|| std::str::from_utf8(f.text).ok()?.parse::<f32>().ok())
+        .then(|| std::str::from_utf8(&f.text).ok()?.parse::<f32>().ok())
         .flatten();
     match parsed {
         Some(v) if v.is_finite() => Ok(v),
         Some(_) => fail(
             line,
             f.at,
-            format!("`{}` is out of the range of f32", shown(f.text)),
+            format!("`{}` is out of the range of f32", shown(&f.text)),
         ),
         None => fail(
             line,
             f.at,
-            format!("`{}` is not a finite decimal number", shown(f.text)),
+            format!("`{}` is not a finite decimal number", shown(&f.text)),
         ),
     }
 }

@@ -1,8 +1,9 @@
 //! The results table: exact text, writer checks, bit-exact round trips, located reader
 //! errors, and no panic on any input.
 
-use super::results::{ResultsTable, ResultsWriter, header};
+use super::results::{ResultsTable, ResultsWriter, TableLayout, header};
 use super::results_read::{read_results, read_results_file};
+use super::row_labels::RowLabels;
 use hirad_core::sink::{PolygonResult, Sink};
 use proptest::prelude::*;
 
@@ -36,7 +37,7 @@ fn one_sided_text() {
     );
     assert_eq!(
         text,
-        "id,area,rad_0,rad_1,rad_2,irr_0,irr_1,irr_2\n\
+        "id,area_m2,rad_0_W_m2,rad_1_W_m2,rad_2_W_m2,irr_0_W_m2,irr_1_W_m2,irr_2_W_m2\n\
          0,0.5,1,2,3,0.1,0.25,0.00000003\n\
          7,2,0,-0,100000000000000000000,4.5,0,1\n"
     );
@@ -54,22 +55,25 @@ fn two_sided_text() {
                 [&[1.0, 2.0], &[3.0, 4.0]],
                 [&[5.0, 6.0], &[7.0, 8.0]],
             ),
-            // A one-sided polygon in a two-sided scene: zeros on the back.
+            // A one-sided polygon in a two-sided scene: no back, empty fields.
             poly(1, 0.25, [&[9.0, 10.0], &[]], [&[11.0, 12.0], &[]]),
         ],
     );
     assert_eq!(
         text,
-        "id,area,rad_0,rad_1,irr_0,irr_1,rad_back_0,rad_back_1,irr_back_0,irr_back_1\n\
+        "id,area_m2,rad_0_W_m2,rad_1_W_m2,irr_0_W_m2,irr_1_W_m2,rad_back_0_W_m2,rad_back_1_W_m2,irr_back_0_W_m2,irr_back_1_W_m2\n\
          0,1,1,2,5,6,3,4,7,8\n\
-         1,0.25,9,10,11,12,0,0,0,0\n"
+         1,0.25,9,10,11,12,,,,\n"
     );
 }
 
 #[test]
 fn empty_table_is_a_header() {
-    assert_eq!(write(1, false, &[]), "id,area,rad_0,irr_0\n");
-    assert_eq!(header(1, true), "id,area,rad_0,irr_0,rad_back_0,irr_back_0");
+    assert_eq!(write(1, false, &[]), "id,area_m2,rad_0_W_m2,irr_0_W_m2\n");
+    assert_eq!(
+        header(1, true),
+        "id,area_m2,rad_0_W_m2,irr_0_W_m2,rad_back_0_W_m2,irr_back_0_W_m2"
+    );
     let t = read_results(b"id,area,rad_0,irr_0\n").unwrap();
     assert!(t.is_empty() && t.bands == 1 && !t.two_sided);
 }
@@ -108,9 +112,12 @@ fn table_push_and_write_match_the_streaming_writer() {
     for p in &polys {
         t.polygon(p).unwrap();
     }
+    // The streamed table reads back as the table in memory (a one-sided row's empty back
+    // fields as zeros), and the table writes what it holds.
+    assert_eq!(read_results(write(1, true, &polys).as_bytes()).unwrap(), t);
     let mut buf = Vec::new();
     t.write_csv(&mut buf).unwrap();
-    assert_eq!(String::from_utf8(buf).unwrap(), write(1, true, &polys));
+    assert_eq!(read_results(&buf).unwrap(), t);
     assert_eq!(t.radiosity(1, 1), &[0.0]);
     assert!(t.polygon(&polys[0]).is_err(), "ids must increase");
 }
@@ -157,10 +164,21 @@ fn reader_errors_are_located() {
     assert!(m.contains("empty line"), "{m}");
     let (l, c, m) = err("id,area,rad_0,irr_x\n");
     assert_eq!((l, c), (1, 15));
-    assert!(m.contains("`irr_0`"), "{m}");
+    assert!(m.contains("band `x`"), "{m}");
     let (l, _, m) = err("id,area,rad_0\n");
     assert_eq!(l, 1);
-    assert!(m.contains("header"), "{m}");
+    assert!(m.contains("no column `irr_0_W_m2`"), "{m}");
+    let (l, c, m) = err("id,area,rad_0,irr_0,colour\n");
+    assert_eq!((l, c), (1, 21));
+    assert!(m.contains("unknown column `colour`"), "{m}");
+    let (l, c, m) = err("id,area,rad_0,irr_0,rad_0\n");
+    assert_eq!((l, c), (1, 21));
+    assert!(m.contains("twice"), "{m}");
+    let (_, _, m) = err("id,rad_0,irr_0\n");
+    assert!(m.contains("no `area_m2`"), "{m}");
+    let (l, c, m) = err("id,area,rad_0,irr_0,material\n0,1,2,3,\"wood\n");
+    assert_eq!((l, c), (2, 9));
+    assert!(m.contains("quoted"), "{m}");
     let (l, c, m) = err("");
     assert_eq!((l, c), (1, 1));
     assert!(m.contains("empty file"), "{m}");
@@ -271,9 +289,16 @@ fn file_errors_name_the_file_and_place() {
     assert!(e.contains("missing.csv: cannot read"), "{e}");
 }
 
+fn faces_layout(faces: Vec<u64>) -> TableLayout {
+    TableLayout {
+        faces: Some(faces),
+        ..TableLayout::plain(1, false)
+    }
+}
+
 #[test]
-fn the_face_column_is_written_last_and_read_back() {
-    let mut w = ResultsWriter::with_faces(Vec::new(), 1, false, Some(vec![7, 7, 9])).unwrap();
+fn the_face_column_is_written_after_the_numbers_and_read_back() {
+    let mut w = ResultsWriter::with_layout(Vec::new(), faces_layout(vec![7, 7, 9])).unwrap();
     for id in 0..3 {
         w.polygon(&poly(id, 1.0, [&[0.5], &[]], [&[1.0], &[]]))
             .unwrap();
@@ -281,13 +306,13 @@ fn the_face_column_is_written_last_and_read_back() {
     let text = String::from_utf8(w.finish().unwrap()).unwrap();
     assert_eq!(
         text,
-        "id,area,rad_0,irr_0,face\n0,1,0.5,1,7\n1,1,0.5,1,7\n2,1,0.5,1,9\n"
+        "id,area_m2,rad_0_W_m2,irr_0_W_m2,face\n0,1,0.5,1,7\n1,1,0.5,1,7\n2,1,0.5,1,9\n"
     );
     let t = read_results(text.as_bytes()).unwrap();
     assert_eq!(t.len(), 3);
     assert_eq!(t.radiosity(2, 0), &[0.5]);
     // A row beyond the face numbers is refused, not written with a wrong one.
-    let mut w = ResultsWriter::with_faces(Vec::new(), 1, false, Some(vec![1])).unwrap();
+    let mut w = ResultsWriter::with_layout(Vec::new(), faces_layout(vec![1])).unwrap();
     assert!(
         w.polygon(&poly(1, 1.0, [&[0.5], &[]], [&[1.0], &[]]))
             .is_err()
@@ -296,4 +321,99 @@ fn the_face_column_is_written_last_and_read_back() {
     let (l, c, m) = err("id,area,rad_0,irr_0,face\n0,1,2,3,x\n");
     assert_eq!((l, c), (2, 9));
     assert!(m.contains("`x`"), "{m}");
+}
+
+#[test]
+fn tables_of_every_earlier_layout_read_alike() {
+    // Index labels without units (before band names and units), named bands with units, and
+    // the columns in another order (the bands' order is that of the front radiosity's).
+    let old = read_results(b"id,area,rad_0,rad_1,irr_0,irr_1\n0,2,1,2,3,4\n").unwrap();
+    let new = read_results(
+        b"id,area_m2,rad_par_W_m2,rad_nir_W_m2,irr_par_W_m2,irr_nir_W_m2,material,group\n\
+          0,2,1,2,3,4,leaf,\"scene/a,b\"\n",
+    )
+    .unwrap();
+    let shuffled = read_results(
+        b"group,irr_nir_W_m2,id,rad_par_W_m2,area_m2,irr_par_W_m2,rad_nir_W_m2\nx,4,0,1,2,3,2\n",
+    )
+    .unwrap();
+    assert_eq!(old, new);
+    assert_eq!(old, shuffled);
+    assert_eq!(old.radiosity(0, 0), &[1.0, 2.0]);
+    assert_eq!(old.irradiance(0, 0), &[3.0, 4.0]);
+}
+
+#[test]
+fn named_bands_units_material_and_group_columns() {
+    use super::columns::band_labels;
+    let names = vec!["par".to_string(), "nir".to_string()];
+    // Built through a scene: two materials, a named cluster and an unnamed one.
+    let rows = {
+        use crate::scene::{Cluster, Material, Scene, quad};
+        use glam::Vec3;
+        let mut s = Scene::new(2);
+        s.band_names = names.clone();
+        for name in ["soil", "leaf, green \"young\""] {
+            s.materials.push(Material {
+                name: name.into(),
+                data: hirad_core::material::MaterialData::black(2),
+            });
+        }
+        let mut plant = Cluster::named("plant");
+        let mut organ = Cluster::default();
+        for x in 0..2 {
+            let c = &mut organ;
+            let base = c.vertices.len() as u32;
+            for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                c.vertex(Vec3::new(x as f32 + dx, dy, 1.0));
+            }
+            c.polygons.push(quad(base, base + 1, base + 2, base + 3, 1));
+        }
+        plant.children.push(organ);
+        let g = &mut s.root;
+        for (dx, dy) in [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0)] {
+            g.vertex(Vec3::new(dx, dy, 0.0));
+        }
+        g.polygons.push(quad(0, 1, 2, 3, 0));
+        s.root.children.push(plant);
+        RowLabels::of(&s)
+    };
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows.group(0), Some("scene"));
+    assert_eq!(rows.group(1), Some("scene/plant/#0"));
+    assert_eq!(rows.group(2), Some("scene/plant/#0"));
+    assert_eq!(rows.group(3), None);
+    assert_eq!(rows.material(2), Some("leaf, green \"young\""));
+    assert!(rows.uses_material(|m| m == 1) && !rows.uses_material(|m| m > 1));
+    let layout = TableLayout {
+        labels: band_labels(2, &names),
+        two_sided: false,
+        faces: None,
+        rows: Some(rows),
+    };
+    let mut w = ResultsWriter::with_layout(Vec::new(), layout).unwrap();
+    for id in 0..3 {
+        w.polygon(&poly(id, 1.0, [&[0.5, 1.5], &[]], [&[1.0, 2.0], &[]]))
+            .unwrap();
+    }
+    let text = String::from_utf8(w.finish().unwrap()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(
+        lines[0],
+        "id,area_m2,rad_par_W_m2,rad_nir_W_m2,irr_par_W_m2,irr_nir_W_m2,material,group"
+    );
+    assert_eq!(lines[1], "0,1,0.5,1.5,1,2,soil,scene");
+    assert_eq!(
+        lines[2],
+        "1,1,0.5,1.5,1,2,\"leaf, green \"\"young\"\"\",scene/plant/#0"
+    );
+    // Quoted fields read back whole.
+    let fields = super::columns::split_fields(lines[2].as_bytes()).unwrap();
+    assert_eq!(&*fields[6].text, b"leaf, green \"young\"");
+    assert_eq!(&*fields[7].text, b"scene/plant/#0");
+    assert_eq!(read_results(text.as_bytes()).unwrap().len(), 3);
+    // Names that are not plain (or repeat) fall back to indices.
+    assert_eq!(band_labels(2, &["a b".into(), "c".into()]), ["0", "1"]);
+    assert_eq!(band_labels(2, &["c".into(), "c".into()]), ["0", "1"]);
+    assert_eq!(band_labels(2, &[]), ["0", "1"]);
 }
