@@ -148,9 +148,10 @@ pub fn read_results(bytes: &[u8]) -> Result<ResultsTable, TableError> {
         table.areas.push(area);
         let bands = table.bands;
         let sides = if table.two_sided { 2 } else { 1 };
-        for side in 0..sides {
-            table.radiosity[side].extend_from_slice(&values[0][side][..bands]);
-            table.irradiance[side].extend_from_slice(&values[1][side][..bands]);
+        let [rad, irr] = &values;
+        for (side, (r, i)) in rad.iter().zip(irr).enumerate().take(sides) {
+            table.radiosity[side].extend_from_slice(&r[..bands]);
+            table.irradiance[side].extend_from_slice(&i[..bands]);
         }
     }
     Ok(table)
