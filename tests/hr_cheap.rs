@@ -137,8 +137,8 @@ fn phases_are_announced_before_their_work() {
         "evaluating links",
         "solving (iterations)",
         "power balance (patches)",
-        "final gather (patches)",
-        "final gather and output (polygons)",
+        "final gather: relighting patches (patches)",
+        "final gather: polygons and output (polygons)",
     ] {
         let first = log.0.iter().find(|(w, _)| w == phase);
         assert_eq!(

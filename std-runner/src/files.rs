@@ -106,10 +106,10 @@ fn read_exact_at(f: &File, mut offset: u64, mut buf: &mut [u8]) -> std::io::Resu
     Ok(())
 }
 
-/// Opens and validates a `.hirb` file without reading it whole.
+/// Opens and validates a `.hirb` file without reading it whole; errors are input errors.
 pub fn open_image(path: &Path) -> Result<SceneView<FileSource>> {
-    let src = FileSource::open(path)?;
-    SceneView::open(src).map_err(|e| anyhow!("{}: {e}", path.display()))
+    let src = FileSource::open(path).map_err(crate::exit::input)?;
+    SceneView::open(src).map_err(|e| crate::exit::input(anyhow!("{}: {e}", path.display())))
 }
 
 /// A loaded scene and the notes the loader made.
@@ -140,7 +140,12 @@ fn read(path: &Path) -> Result<Vec<u8>> {
 
 /// Loads a scene from `.hir`, `.hirb` or `.obj`; every error names the file and the line and
 /// column (text) or byte offset (binary) of the fault.
+/// Errors are input errors (exit status 3, see [`crate::exit`]).
 pub fn load_scene(path: &Path) -> Result<Loaded> {
+    load(path).map_err(crate::exit::input)
+}
+
+fn load(path: &Path) -> Result<Loaded> {
     let format = Format::of(path)?;
     not_a_directory(path)?;
     let mut warnings = Vec::new();
@@ -224,8 +229,9 @@ fn relocate(dir: &Path, e: &obj::ObjError) -> String {
 }
 
 /// Compiles a loaded scene into its binary image, with the file named in errors.
+/// Errors are input errors (the scene is invalid).
 pub fn compile(path: &Path, scene: &Scene) -> Result<Vec<u8>> {
-    scene::compile(scene).map_err(|e| anyhow!("{}: {e}", path.display()))
+    scene::compile(scene).map_err(|e| crate::exit::input(anyhow!("{}: {e}", path.display())))
 }
 
 /// Writes `path` through a temporary file in the same directory, renamed into place only

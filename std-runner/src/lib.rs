@@ -4,6 +4,7 @@
 pub mod cli;
 pub mod directional;
 pub mod exact;
+pub mod exit;
 pub mod files;
 pub mod generate;
 pub mod interrupt;

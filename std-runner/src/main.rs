@@ -12,7 +12,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            // The statuses are documented in `hirad::exit` and README.md.
+            ExitCode::from(hirad::exit::class_of(&e) as u8)
         }
     }
 }

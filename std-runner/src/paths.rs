@@ -18,7 +18,12 @@ pub struct Output<'a> {
 /// Checks `outputs` against each other and against `inputs` (the files the run reads).
 /// An existing device or pipe (`/dev/null`, a FIFO) is written into, never replaced, and
 /// may be named by several outputs.
+/// Errors are usage errors (exit status 2, see [`crate::exit`]).
 pub fn check_outputs(inputs: &[PathBuf], outputs: &[Output<'_>]) -> Result<()> {
+    check(inputs, outputs).map_err(crate::exit::usage)
+}
+
+fn check(inputs: &[PathBuf], outputs: &[Output<'_>]) -> Result<()> {
     let mut seen: Vec<(PathBuf, Output<'_>)> = Vec::new();
     for out in outputs {
         let (option, path) = (out.option, out.path);

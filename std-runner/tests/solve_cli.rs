@@ -171,7 +171,8 @@ fn reference_error_and_stats() {
         "lighting patches",
         "evaluating links",
         "solving",
-        "final gather",
+        "final gather: relighting patches",
+        "final gather: polygons and output",
     ] {
         assert!(names.contains(&want), "no phase {want}: {names:?}");
     }

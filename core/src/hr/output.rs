@@ -25,7 +25,7 @@ pub(crate) struct Written {
 
 /// The output phase's name for progress reports: the polygons' final gather and their
 /// hand-over to the sink run chunk by chunk together.
-const GATHER_PHASE: &str = "final gather and output (polygons)";
+const GATHER_PHASE: &str = "final gather: polygons and output (polygons)";
 const WRITE_PHASE: &str = "writing (polygons)";
 
 /// The name under which the output pass reports its progress.

@@ -281,7 +281,7 @@ fn relight<V: Visibility + ?Sized, E: Executor>(
             },
             &mut |done, total| {
                 progress.report(
-                    "final gather (patches)",
+                    "final gather: relighting patches (patches)",
                     offset + (done * CHUNK).min(n) as u64,
                     all.max(offset + (total * CHUNK).min(n) as u64),
                 )
@@ -308,7 +308,7 @@ struct Relabel<'a>(&'a mut dyn Progress);
 impl Progress for Relabel<'_> {
     fn report(&mut self, what: &str, done: u64, total: u64) {
         let what = if what.starts_with("solving") {
-            "final gather (solving)"
+            "final gather: solving again (iterations)"
         } else {
             what
         };

@@ -31,7 +31,7 @@ pub struct Args {
 
 /// Runs `hirad convert`.
 pub fn run(a: Args) -> Result<()> {
-    let out_format = Format::of(&a.output)?;
+    let out_format = Format::of(&a.output).map_err(crate::exit::usage)?;
     let mut loaded = files::load_scene(&a.scene)?;
     check_scene_outputs(&loaded.inputs, &a.output, out_format)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);

@@ -1,7 +1,7 @@
 //! `hirad flatten SCENE -o OUT.obj`.
 
 use crate::files::{self, Format};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -29,10 +29,10 @@ pub struct Args {
 /// Runs `hirad flatten`.
 pub fn run(a: Args) -> Result<()> {
     if Format::of(&a.output).ok() != Some(Format::Obj) {
-        bail!(
+        return Err(crate::exit::usage(anyhow::anyhow!(
             "{}: flatten writes Wavefront OBJ; give an output ending in .obj",
             a.output.display()
-        );
+        )));
     }
     let start = Instant::now();
     let loaded = files::load_scene(&a.scene)?;

@@ -80,15 +80,15 @@ fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
 
 /// Runs `hirad info`.
 pub fn run(a: Args) -> Result<()> {
-    let format = Format::of(&a.scene)?;
+    let format = Format::of(&a.scene).map_err(crate::exit::input)?;
     let r = if format == Format::Binary {
-        report(format, &files::open_image(&a.scene)?)?
+        report(format, &files::open_image(&a.scene)?).map_err(crate::exit::input)?
     } else {
         let loaded = files::load_scene(&a.scene)?;
         super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
         let bytes = files::compile(&a.scene, &loaded.scene)?;
         let view = crate::scene::read_image(&bytes)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", a.scene.display()))?;
+            .map_err(|e| crate::exit::input(anyhow::anyhow!("{}: {e}", a.scene.display())))?;
         report(format, &view)?
     };
     let text = if a.json {
@@ -138,8 +138,9 @@ fn table(path: &std::path::Path, r: &Report) -> String {
     let _ = writeln!(s, "cluster depth     {}", i.max_node_depth);
     let _ = writeln!(
         s,
-        "lights            {} suns, {} sky directions",
-        i.suns, i.sky
+        "lights            {}, {}",
+        plural(i.suns as u64, "sun", "suns"),
+        plural(i.sky as u64, "sky direction", "sky directions")
     );
     let _ = writeln!(s, "cameras           {}", i.cameras);
     let _ = writeln!(
@@ -203,4 +204,9 @@ pub(crate) fn json_str(s: &str) -> String {
     }
     o.push('"');
     o
+}
+
+/// `1 sun`, `2 suns`, `0 suns`.
+pub(crate) fn plural(n: u64, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
 }

@@ -2,10 +2,11 @@
 //! the error against a reference.
 
 use crate::exact::{self, ExactSettings};
+use crate::exit::{input, not_right, usage};
 use crate::files;
 use crate::output::{self, ImageSink, Outputs, Progress, ReferenceSink, ResultsFile, SolveReport};
 use crate::solve::{self, VisibilityChoice};
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use hirad_core::hr::Settings;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -148,20 +149,27 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
 /// Runs `hirad solve`.
 pub fn run(a: Args) -> Result<()> {
     let start = Instant::now();
+    let refuse = |m: String| Err(usage(anyhow!(m)));
     if !(a.epsilon.is_finite() && a.epsilon > 0.0) {
-        bail!("--epsilon must be a positive number, got {}", a.epsilon);
+        return refuse(format!(
+            "--epsilon must be a positive number, got {}",
+            a.epsilon
+        ));
     }
     if !(a.min_area.is_finite() && (0.0..1.0).contains(&a.min_area)) {
-        bail!("--min-area must lie in [0, 1), got {}", a.min_area);
+        return refuse(format!("--min-area must lie in [0, 1), got {}", a.min_area));
     }
     if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
-        bail!("--tolerance must be a positive number, got {}", a.tolerance);
+        return refuse(format!(
+            "--tolerance must be a positive number, got {}",
+            a.tolerance
+        ));
     }
     if !(a.max_imbalance.is_finite() && a.max_imbalance >= 0.0) {
-        bail!(
+        return refuse(format!(
             "--max-imbalance must be a percentage of at least 0, got {}",
             a.max_imbalance
-        );
+        ));
     }
     // Counts are range-checked as clap parses them (1..=1024 threads: 100,000 aborted the
     // process setting up their stacks).
@@ -176,19 +184,22 @@ pub fn run(a: Args) -> Result<()> {
     let scene = &loaded.scene;
     let bytes = files::compile(&a.scene, scene)?;
     let info = *crate::scene::read_image(&bytes)
-        .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?
+        .map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?
         .info();
     drop(bytes);
     if info.expanded_polygons == 0 {
         if loaded.skipped_faces > 0 {
-            bail!(
+            return Err(input(anyhow!(
                 "{}: no usable polygons ({} face{} skipped: see the warnings)",
                 a.scene.display(),
                 loaded.skipped_faces,
                 if loaded.skipped_faces == 1 { "" } else { "s" }
-            );
+            )));
         }
-        bail!("{}: the scene has no polygons", a.scene.display());
+        return Err(input(anyhow!(
+            "{}: the scene has no polygons",
+            a.scene.display()
+        )));
     }
     let bands = scene.bands as usize;
     // Material and group of every row; back-side columns only when a polygon is two-sided.
@@ -213,27 +224,28 @@ pub fn run(a: Args) -> Result<()> {
     crate::paths::check_outputs(&inputs, &named)?;
     crate::interrupt::expect(&named.iter().map(|o| o.path).collect::<Vec<_>>());
     let mut outputs = Outputs::default();
+    let mut image_settings = None;
     if let Some(path) = &a.reference {
         let table = output::read_results_file(path)?;
         if table.len() as u64 != info.expanded_polygons {
-            bail!(
+            return Err(input(anyhow!(
                 "{}: the reference has {} polygons but {} has {}",
                 path.display(),
                 table.len(),
                 a.scene.display(),
                 info.expanded_polygons
-            );
+            )));
         }
         outputs.reference = Some(
             ReferenceSink::new(table, bands, two_sided)
-                .map_err(|e| anyhow!("{}: {e}", path.display()))?,
+                .map_err(|e| input(anyhow!("{}: {e}", path.display())))?,
         );
     }
     if let Some(path) = &a.image {
         let size = output::parse_size(a.size.as_deref().unwrap_or(DEFAULT_SIZE))
-            .map_err(|e| anyhow!("{e}"))?;
+            .map_err(|e| usage(anyhow!("{e}")))?;
         let camera = match &a.camera {
-            Some(c) => output::parse_camera(c).map_err(|e| anyhow!("{e}"))?,
+            Some(c) => output::parse_camera(c).map_err(|e| usage(anyhow!("{e}")))?,
             None => match scene.cameras.first() {
                 Some(c) => {
                     if a.up.is_some() && !a.quiet {
@@ -247,7 +259,7 @@ pub fn run(a: Args) -> Result<()> {
                 // upright (`scene::Up`: OBJ files are y up, hirad's own scenes z up).
                 None => {
                     let c = output::view::choose(scene, &output::scene_bounds(scene), size, up)
-                        .map_err(|e| anyhow!("{e}"))?;
+                        .map_err(|e| usage(anyhow!("{e}")))?;
                     if !a.quiet {
                         eprintln!(
                             "note: the default view, {} up: --camera {} (change it, or --up)",
@@ -259,6 +271,12 @@ pub fn run(a: Args) -> Result<()> {
                 }
             },
         };
+        image_settings = Some(output::ImageSettings {
+            size: [size.width, size.height],
+            camera: output::camera_arg(&camera),
+            supersample: a.supersample.unwrap_or(1),
+            display_bands: a.display_bands.clone(),
+        });
         let mut sink = ImageSink::new(
             path,
             &camera,
@@ -266,11 +284,12 @@ pub fn run(a: Args) -> Result<()> {
             a.supersample.unwrap_or(1),
             bands,
             &scene.band_names,
-        )?;
+        )
+        .map_err(usage)?;
         if sink.is_png() {
             let display = match &a.display_bands {
                 Some(spec) => output::DisplayBands::parse(spec, bands, &scene.band_names)
-                    .map_err(|e| anyhow!("{e}"))?,
+                    .map_err(|e| usage(anyhow!("{e}")))?,
                 None => output::DisplayBands::default_for(bands),
             };
             if !a.quiet && (bands != 3 || a.display_bands.is_some()) {
@@ -298,24 +317,56 @@ pub fn run(a: Args) -> Result<()> {
         outputs.image = Some(sink);
     }
     if let Some(path) = &a.results {
-        outputs.results = Some(ResultsFile::create_with_layout(
-            path,
-            output::TableLayout {
-                labels: output::columns::band_labels(bands, &scene.band_names),
-                two_sided,
-                faces: loaded.faces.clone(),
-                rows: Some(labels),
-            },
-        )?);
+        outputs.results = Some(
+            ResultsFile::create_with_layout(
+                path,
+                output::TableLayout {
+                    labels: output::columns::band_labels(bands, &scene.band_names),
+                    two_sided,
+                    faces: loaded.faces.clone(),
+                    rows: Some(labels),
+                },
+            )
+            .map_err(usage)?,
+        );
     }
 
     let progress = Progress::new(a.quiet);
+    let method = match a.method {
+        Method::Hr => "hr",
+        Method::Exact => "exact",
+    };
+    let hr = a.method == Method::Hr;
+    // f32 settings as the decimal given, not its f32 widening (1e-3, not 0.0010000000474).
+    let decimal = |v: f32| v.to_string().parse().unwrap_or(v as f64);
+    let count = |v: u32| {
+        if v == Settings::AUTO {
+            "auto".to_string()
+        } else {
+            v.to_string()
+        }
+    };
     let mut report = SolveReport {
-        method: match a.method {
-            Method::Hr => "hr".into(),
-            Method::Exact => "exact".into(),
-        },
-        epsilon: a.epsilon.to_string().parse().unwrap_or(a.epsilon as f64),
+        hirad_version: env!("CARGO_PKG_VERSION").into(),
+        scene: a.scene.display().to_string(),
+        settings: Some(output::RunSettings {
+            method: method.into(),
+            epsilon: hr.then(|| decimal(a.epsilon)),
+            rays: hr.then_some(a.rays),
+            final_rays: hr.then(|| count(a.final_rays)),
+            final_passes: hr.then(|| count(a.final_passes)),
+            min_area: hr.then(|| decimal(a.min_area)),
+            tolerance: decimal(a.tolerance),
+            max_iterations: hr.then_some(a.max_iterations),
+            max_imbalance_percent: Some(a.max_imbalance),
+            memory_bytes: if hr { a.memory } else { None },
+            visibility: hr.then(|| format!("{:?}", a.visibility).to_lowercase()),
+            elements: (!hr).then_some(a.elements),
+            threads: a.threads.map(u32::from),
+            image: image_settings,
+        }),
+        method: method.into(),
+        epsilon: hr.then(|| decimal(a.epsilon)),
         threads: threads as u32,
         polygons: info.expanded_polygons,
         elements: 0,
@@ -383,23 +434,18 @@ pub fn run(a: Args) -> Result<()> {
             report.converged = s.converged;
             report.diverged = s.diverged;
             report.remaining_change = Some(s.remaining_change as f64).filter(|r| r.is_finite());
+            let p = &s.balance;
             report.power = (0..bands)
                 .map(|b| {
-                    let p = &s.balance;
-                    crate::output::BandPower {
-                        band: scene
-                            .band_names
-                            .get(b)
-                            .cloned()
-                            .unwrap_or_else(|| b.to_string()),
-                        emitted: p.emitted[b],
-                        direct: p.direct[b],
-                        absorbed: p.absorbed[b],
-                        absorbed_backs: p.absorbed_backs[b],
-                        escaped: p.escaped[b],
-                        imbalance: p.imbalance(b),
-                        imbalance_percent: 100.0 * p.relative_imbalance(b),
-                    }
+                    band_power(
+                        &scene.band_names,
+                        b,
+                        p.emitted[b],
+                        p.direct[b],
+                        p.absorbed[b],
+                        p.absorbed_backs[b],
+                        p.escaped[b],
+                    )
                 })
                 .collect();
         }
@@ -416,7 +462,19 @@ pub fn run(a: Args) -> Result<()> {
                 .install(|| {
                     exact::solve_exact_obvhs_with(scene, &settings, &mut outputs, &progress)
                 })
-                .map_err(|e| anyhow!("{}: {e}", a.scene.display()))?;
+                .map_err(|e| {
+                    let error = anyhow!("{}: {e}", a.scene.display());
+                    match e {
+                        exact::ExactError::Scene(_) | exact::ExactError::Visibility(_) => {
+                            input(error)
+                        }
+                        exact::ExactError::Settings(_) | exact::ExactError::TooLarge { .. } => {
+                            usage(error)
+                        }
+                        exact::ExactError::NotConverged { .. } => not_right(error),
+                        exact::ExactError::Sink(_) => error,
+                    }
+                })?;
             progress.finish();
             report.elements = r.elements as u64;
             report.links = r.form_factors;
@@ -425,14 +483,30 @@ pub fn run(a: Args) -> Result<()> {
             report.peak_workspace_bytes = r.matrix_bytes;
             // The exact solver fails rather than return an unconverged solution.
             report.converged = true;
+            report.remaining_change = Some(r.error).filter(|e| e.is_finite());
+            report.rays = r.rays;
+            let p = &r.balance;
+            report.power = (0..bands)
+                .map(|b| {
+                    band_power(
+                        &scene.band_names,
+                        b,
+                        p.emitted[b],
+                        p.direct[b],
+                        p.absorbed[b],
+                        p.absorbed_backs[b],
+                        p.escaped[b],
+                    )
+                })
+                .collect();
         }
     }
     report.seconds = start.elapsed().as_secs_f64();
-    if !a.quiet
-        && let Some(why) = outputs.image.as_ref().and_then(|i| i.nearly_black())
-    {
-        eprintln!("warning: {why}");
+    let mut warnings = Vec::new();
+    if let Some(why) = outputs.image.as_ref().and_then(|i| i.nearly_black()) {
+        warnings.push(why);
     }
+    let written_rows = outputs.results.as_ref().map(|_| info.expanded_polygons);
     let comparison = outputs.finish()?;
     if let Some(c) = &comparison {
         report.set_comparison(c);
@@ -441,6 +515,30 @@ pub fn run(a: Args) -> Result<()> {
             c.error_percent, c.reference_max, c.polygons
         ))?;
         super::print_out(&c.worst_lines(&scene.band_names))?;
+    }
+    // The verdict, before the stats that record it: why the numbers are not right, if so.
+    let failure = failure(&report, &a);
+    let balance_warning = balance_warning(&report, &a);
+    warnings.extend(balance_warning.clone());
+    report.verdict = Some(output::Verdict {
+        passed: failure.is_none(),
+        reason: match (&failure, &balance_warning) {
+            (Some(f), _) => f.clone(),
+            (None, Some(w)) => format!("passed with a warning: {w}"),
+            (None, None) => "every check passed".into(),
+        },
+    });
+    for (option, path) in [
+        ("--results", &a.results),
+        ("--image", &a.image),
+        ("--stats", &a.stats),
+    ] {
+        if let Some(p) = path {
+            report.outputs.push(output::OutputFile {
+                option: option.into(),
+                path: p.display().to_string(),
+            });
+        }
     }
     if let Some(path) = &a.stats {
         report.write_json(path)?;
@@ -452,15 +550,69 @@ pub fn run(a: Args) -> Result<()> {
                 "note: the workspace budget limited refinement; give more --memory for the full accuracy of this epsilon"
             );
         }
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+        let wrote: Vec<String> = [
+            (&a.results, written_rows.map(|n| format!(" ({n} rows)"))),
+            (&a.image, None),
+            (&a.stats, None),
+        ]
+        .into_iter()
+        .filter_map(|(p, what)| {
+            p.as_ref()
+                .map(|p| format!("{}{}", p.display(), what.unwrap_or_default()))
+        })
+        .collect();
+        if !wrote.is_empty() {
+            eprintln!("wrote {}", wrote.join(", "));
+        }
     }
+    match failure {
+        Some(why) => Err(not_right(anyhow!(why))),
+        None => Ok(()),
+    }
+}
+
+/// One band's line of the power balance.
+fn band_power(
+    names: &[String],
+    b: usize,
+    emitted: f64,
+    direct: f64,
+    absorbed: f64,
+    absorbed_backs: f64,
+    escaped: f64,
+) -> output::BandPower {
+    let input = emitted + direct;
+    let imbalance = input - absorbed - absorbed_backs - escaped;
+    output::BandPower {
+        band: names.get(b).cloned().unwrap_or_else(|| b.to_string()),
+        emitted,
+        direct,
+        absorbed,
+        absorbed_backs,
+        escaped,
+        imbalance,
+        imbalance_percent: if input > 0.0 {
+            100.0 * imbalance / input
+        } else {
+            0.0
+        },
+    }
+}
+
+/// Why the run's numbers are not right (the run then exits 1 after writing its outputs), or
+/// `None`.
+fn failure(report: &SolveReport, a: &Args) -> Option<String> {
     if report.diverged {
-        bail!(
+        return Some(format!(
             "the solution diverged (a radiosity grew without bound after {} iterations): the outputs were written but mean nothing; this is a solver defect, please report the scene",
             report.iterations
-        );
+        ));
     }
     if !report.converged {
-        bail!(
+        return Some(format!(
             "the solution did not converge within {} iterations{}: the outputs were written but are not final (raise --tolerance, or check that the scene absorbs light)",
             a.max_iterations,
             report
@@ -469,36 +621,61 @@ pub fn run(a: Args) -> Result<()> {
                     " (estimated change still to come {r:.1e} of the largest radiosity)"
                 ))
                 .unwrap_or_default()
-        );
+        ));
     }
-    // An unconverged solution fails above; the balance of a final one:
-    // The band whose power balance is worst (hr only: the exact solver has no balance).
-    let worst = report.power.iter().max_by(|x, y| {
+    let w = worst_band(report)?;
+    (w.imbalance_percent.abs() > a.max_imbalance).then(|| {
+        format!(
+            "{}; above --max-imbalance {}%, the outputs were written but are not right",
+            balance_line(report, w),
+            a.max_imbalance
+        )
+    })
+}
+
+/// The warning of a power balance off by more than 1% but within `--max-imbalance`.
+fn balance_warning(report: &SolveReport, a: &Args) -> Option<String> {
+    let w = worst_band(report)?;
+    let off = w.imbalance_percent.abs();
+    (off > a.max_imbalance.min(1.0) && off <= a.max_imbalance).then(|| balance_line(report, w))
+}
+
+/// The band whose power balance is worst.
+fn worst_band(report: &SolveReport) -> Option<&output::BandPower> {
+    report.power.iter().max_by(|x, y| {
         x.imbalance_percent
             .abs()
             .total_cmp(&y.imbalance_percent.abs())
-    });
-    if let Some(w) = worst.filter(|w| w.imbalance_percent.abs() > a.max_imbalance.min(1.0)) {
-        let what = if w.imbalance_percent > 0.0 {
-            "lost"
-        } else {
-            "made"
-        };
-        let line = format!(
-            "the power balance is off by {:+.2}% in band {}: the transport {what} that much light (cluster links approximate; a smaller --epsilon or more --rays brings it down)",
-            w.imbalance_percent, w.band
-        );
-        if w.imbalance_percent.abs() > a.max_imbalance {
-            bail!(
-                "{line}; above --max-imbalance {}%, the outputs were written but are not right",
-                a.max_imbalance
-            );
-        }
-        if !a.quiet {
-            eprintln!("warning: {line}");
-        }
-    }
-    Ok(())
+    })
+}
+
+fn balance_line(report: &SolveReport, w: &output::BandPower) -> String {
+    let index = report
+        .power
+        .iter()
+        .position(|p| std::ptr::eq(p, w))
+        .unwrap_or(0);
+    let names: Vec<String> = report.power.iter().map(|p| p.band.clone()).collect();
+    let names = if names.iter().enumerate().all(|(i, n)| *n == i.to_string()) {
+        Vec::new()
+    } else {
+        names
+    };
+    let what = if w.imbalance_percent > 0.0 {
+        "lost"
+    } else {
+        "made"
+    };
+    let cure = if report.method == "exact" {
+        "the form factors disagree with the rays: more --elements brings it down"
+    } else {
+        "cluster links approximate; a smaller --epsilon or more --rays brings it down"
+    };
+    format!(
+        "the power balance is off by {:+.2}% in {}: the transport {what} that much light ({cure})",
+        w.imbalance_percent,
+        output::columns::band_name(index, &names)
+    )
 }
 
 /// The image size without `--size`.

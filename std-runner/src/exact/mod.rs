@@ -44,6 +44,7 @@
 //!
 //! Units: metres, W/m^2.
 
+mod balance;
 mod buried;
 mod direct;
 mod error;
@@ -54,6 +55,7 @@ mod quadrature;
 mod rays;
 mod solve;
 
+pub use balance::{ExactBalance, RAYS_PER_SIDE};
 pub use error::ExactError;
 
 use crate::output::Progress;
@@ -160,6 +162,8 @@ pub struct ExactReport {
     pub matrix_seconds: f64,
     /// Bytes of the stored matrix.
     pub matrix_bytes: u64,
+    /// Where the power went (see `balance`); its rays are not counted in `rays`.
+    pub balance: ExactBalance,
 }
 
 /// Solves `scene` with `visibility` (polygon ids = global ids of the expanded scene) and
@@ -262,6 +266,16 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
         progress,
     )
     .map_err(|(iterations, error)| ExactError::NotConverged { iterations, error })?;
+    progress.phase("power balance", None);
+    let power = balance::balance(
+        scene,
+        mesh,
+        &quad,
+        &solution,
+        &direct,
+        &exposure.exposed,
+        visibility,
+    );
     progress.phase("writing", None);
     output::emit(scene, mesh, &solution, &exposure.exposed, sink).map_err(ExactError::Sink)?;
     Ok(ExactReport {
@@ -278,6 +292,7 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
         seconds: start.elapsed().as_secs_f64(),
         matrix_seconds,
         matrix_bytes: m.bytes(),
+        balance: power,
     })
 }
 

@@ -98,7 +98,7 @@ pub fn run(a: Args) -> Result<()> {
         Kind::Canopy(k) => &k.common,
     };
     // Where the scene goes, checked before it is made.
-    Format::of(&common.output)?;
+    Format::of(&common.output).map_err(crate::exit::usage)?;
     crate::paths::check_outputs(
         &[],
         &[crate::paths::Output {
@@ -108,11 +108,11 @@ pub fn run(a: Args) -> Result<()> {
     )?;
     crate::interrupt::expect(&[&common.output]);
     let (scene, common) = match &a.kind {
-        Kind::Poplar(k) => (poplar::generate(k)?, &k.common),
-        Kind::Stand(k) => (stand::generate(k)?, &k.common),
-        Kind::Room(k) => (room::generate(k)?, &k.common),
-        Kind::Forest(k) => (forest::generate(k)?, &k.common),
-        Kind::Canopy(k) => (canopy::generate(k)?, &k.common),
+        Kind::Poplar(k) => (poplar::generate(k).map_err(crate::exit::usage)?, &k.common),
+        Kind::Stand(k) => (stand::generate(k).map_err(crate::exit::usage)?, &k.common),
+        Kind::Room(k) => (room::generate(k).map_err(crate::exit::usage)?, &k.common),
+        Kind::Forest(k) => (forest::generate(k).map_err(crate::exit::usage)?, &k.common),
+        Kind::Canopy(k) => (canopy::generate(k).map_err(crate::exit::usage)?, &k.common),
     };
     let bytes = write(&scene, &common.output)?;
     if !common.quiet {

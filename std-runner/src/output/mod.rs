@@ -36,7 +36,9 @@ pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compa
 pub use results::{ResultsFile, ResultsTable, ResultsWriter, TableLayout};
 pub use results_read::{TableError, read_results, read_results_file};
 pub use row_labels::RowLabels;
-pub use stats::{BandPower, PhaseTime, RaysByPhase, SolveReport};
+pub use stats::{
+    BandPower, ImageSettings, OutputFile, PhaseTime, RaysByPhase, RunSettings, SolveReport, Verdict,
+};
 
 #[cfg(test)]
 mod tests_camera;

@@ -1,11 +1,18 @@
-//! A one-line progress bar on stderr for long solves: silent for the first second, redrawn at
-//! most ten times a second (and whenever a phase starts or completes, so that no phase shows
-//! a stale count), only when stderr is a terminal, never with `--quiet`. A phase with a known
-//! total shows its bar, its count and, once it has run a few seconds, the time it still
-//! needs at its pace so far. Safe to update from several threads.
+//! Progress of long runs on stderr, never with `--quiet`, silent for the first second. Safe
+//! to update from several threads.
 //!
-//! `HIRAD_PROGRESS=always` draws it even when stderr is not a terminal (a log);
-//! `HIRAD_PROGRESS=every` draws every update from the start (what the tests read).
+//! * On a terminal, a one-line bar redrawn at most ten times a second (and whenever a phase
+//!   starts or completes, so that no phase shows a stale count). A phase with a known total
+//!   shows its bar, its count and, once it has run a few seconds, the time it still needs at
+//!   its pace so far.
+//! * Without a terminal (a log, CI), plain lines, no escape codes: one when a phase starts
+//!   (at most one every [`LOG_MIN`]) and one every [`LOG_EVERY`] within a long phase, each
+//!   with the run's time, e.g. `progress 12.4 s: lighting patches 5120/20480 (25%), about
+//!   37 s left`.
+//!
+//! `HIRAD_PROGRESS` overrides the choice: `bar` draws the bar, `lines` (or `always`) writes
+//! the lines, `off` shows nothing, `every` draws every update as a bar from the start (what
+//! the tests read).
 
 use std::io::{IsTerminal, Write};
 use std::sync::Mutex;
@@ -26,6 +33,12 @@ const PHASE_CHARS: usize = 40;
 /// A phase that has run this long shows how long it still needs.
 const ETA_AFTER: Duration = Duration::from_secs(3);
 
+/// Without a terminal: the shortest time between two lines.
+pub const LOG_MIN: Duration = Duration::from_secs(2);
+
+/// Without a terminal: a line at least this often within a long phase.
+pub const LOG_EVERY: Duration = Duration::from_secs(10);
+
 struct State {
     phase: String,
     total: Option<u64>,
@@ -34,6 +47,8 @@ struct State {
     since: Instant,
     last_draw: Option<Instant>,
     shown: bool,
+    /// The phase of the last line written (lines mode).
+    logged: String,
     out: Box<dyn Write + Send>,
 }
 
@@ -43,6 +58,8 @@ pub struct Progress {
     enabled: bool,
     /// Every update drawn, from the start (`HIRAD_PROGRESS=every`).
     every: bool,
+    /// Plain lines instead of a bar (no terminal).
+    lines: bool,
     start: Instant,
     state: Mutex<State>,
 }
@@ -52,10 +69,23 @@ impl Progress {
     /// (unless `HIRAD_PROGRESS` says otherwise: see the module).
     pub fn new(quiet: bool) -> Self {
         let mode = std::env::var("HIRAD_PROGRESS").unwrap_or_default();
-        let forced = mode == "always" || mode == "every";
-        let enabled = !quiet && (forced || std::io::stderr().is_terminal());
-        let mut p = Self::with_output(enabled, Box::new(std::io::stderr()));
+        let terminal = std::io::stderr().is_terminal();
+        let (enabled, lines) = match mode.as_str() {
+            "off" | "never" | "0" => (false, false),
+            "bar" | "every" => (true, false),
+            "lines" | "always" => (true, true),
+            _ => (true, !terminal),
+        };
+        let mut p = Self::with_output(enabled && !quiet, Box::new(std::io::stderr()));
         p.every = mode == "every";
+        p.lines = lines;
+        p
+    }
+
+    /// A reporter writing plain lines to any writer (for tests).
+    pub(crate) fn with_lines(out: Box<dyn Write + Send>) -> Self {
+        let mut p = Self::with_output(true, out);
+        p.lines = true;
         p
     }
 
@@ -65,6 +95,7 @@ impl Progress {
         Progress {
             enabled,
             every: false,
+            lines: false,
             start,
             state: Mutex::new(State {
                 phase: String::new(),
@@ -73,6 +104,7 @@ impl Progress {
                 since: start,
                 last_draw: None,
                 shown: false,
+                logged: String::new(),
                 out,
             }),
         }
@@ -119,7 +151,7 @@ impl Progress {
 
     /// Clears the line, if one was drawn.
     pub fn finish(&self) {
-        if !self.enabled {
+        if !self.enabled || self.lines {
             return;
         }
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
@@ -148,6 +180,25 @@ impl Progress {
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let must = change(&mut s);
         let elapsed = now.saturating_duration_since(self.start);
+        if self.lines {
+            let since = s.last_draw.map(|t| now.saturating_duration_since(t));
+            let new_phase = s.phase != s.logged;
+            let due = elapsed >= QUIET_START
+                && since.is_none_or(|d| d >= LOG_EVERY || (new_phase && d >= LOG_MIN));
+            if due {
+                let mut text = log_line(&s.phase, s.done, s.total, elapsed);
+                if let Some(left) =
+                    remaining(s.done, s.total, now.saturating_duration_since(s.since))
+                {
+                    text.push_str(&format!(", about {} left", duration(left)));
+                }
+                let _ = writeln!(s.out, "{text}");
+                let _ = s.out.flush();
+                s.last_draw = Some(now);
+                s.logged = s.phase.clone();
+            }
+            return;
+        }
         let due = self.every
             || (elapsed >= QUIET_START
                 && (must
@@ -191,6 +242,24 @@ fn duration(d: Duration) -> String {
         format!("{} min {:02} s", s / 60, s % 60)
     } else {
         format!("{} h {:02} min", s / 3600, (s % 3600) / 60)
+    }
+}
+
+/// A line of a log: `progress 12.4 s: phase 5120/20480 (25%)`, or `progress 3.0 s:
+/// phase: 12` for an open count (`progress 3.0 s: phase` when it counts nothing).
+pub fn log_line(phase: &str, done: u64, total: Option<u64>, elapsed: Duration) -> String {
+    let secs = elapsed.as_secs_f64();
+    match total {
+        Some(total) => {
+            let pct = if total == 0 {
+                100.0
+            } else {
+                (done as f64 / total as f64).clamp(0.0, 1.0) * 100.0
+            };
+            format!("progress {secs:.1} s: {phase} {done}/{total} ({pct:.0}%)")
+        }
+        None if done == 0 && !phase.ends_with(')') => format!("progress {secs:.1} s: {phase}"),
+        None => format!("progress {secs:.1} s: {phase}: {done}"),
     }
 }
 

@@ -58,11 +58,12 @@ fn shown(text: &[u8]) -> String {
     out
 }
 
-/// Reads a table file; errors name the file and the line:column of the fault.
+/// Reads a table file; errors name the file and the line:column of the fault, and are
+/// input errors (exit status 3).
 pub fn read_results_file(path: &Path) -> anyhow::Result<ResultsTable> {
-    let bytes =
-        std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
-    read_results(&bytes).map_err(|e| anyhow::anyhow!("{}:{e}", path.display()))
+    let bytes = std::fs::read(path)
+        .map_err(|e| crate::exit::input(anyhow::anyhow!("{}: cannot read: {e}", path.display())))?;
+    read_results(&bytes).map_err(|e| crate::exit::input(anyhow::anyhow!("{}:{e}", path.display())))
 }
 
 /// Parses a whole table. Accepts `\n` or `\r\n` line ends, an optional final newline and a

@@ -32,7 +32,8 @@ pub struct BandPower {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PhaseTime {
     /// The phase ("setup", "lighting patches", "evaluating links", "refining", "closing",
-    /// "solving", "power balance", "final gather", ...).
+    /// "solving", "power balance", "final gather: relighting patches", "final gather:
+    /// solving again", "final gather: polygons and output").
     pub phase: String,
     /// Seconds spent in it, summed over every time it ran.
     pub seconds: f64,
@@ -42,14 +43,96 @@ fn yes() -> bool {
     true
 }
 
+/// Every setting a solve ran with, as given or chosen (`null` where the method has no such
+/// setting), so that a stats file says how to repeat its run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunSettings {
+    /// `--method`: `hr` or `exact`.
+    pub method: String,
+    /// `--epsilon` (hr): refinement threshold, dimensionless.
+    pub epsilon: Option<f64>,
+    /// `--rays` (hr): visibility rays per receiver point and link.
+    pub rays: Option<u32>,
+    /// `--final-rays` (hr): `"auto"` or rays per receiving side.
+    pub final_rays: Option<String>,
+    /// `--final-passes` (hr): `"auto"` or a count.
+    pub final_passes: Option<String>,
+    /// `--min-area` (hr): smallest patch, fraction of the scene's polygon area.
+    pub min_area: Option<f64>,
+    /// `--tolerance`: convergence tolerance, relative to the largest radiosity.
+    pub tolerance: f64,
+    /// `--max-iterations` (hr).
+    pub max_iterations: Option<u32>,
+    /// `--max-imbalance` (hr): largest power imbalance a run may end with and pass (%).
+    pub max_imbalance_percent: Option<f64>,
+    /// `--memory` (hr): workspace bytes asked; `null` for the planner's suggestion.
+    pub memory_bytes: Option<u64>,
+    /// `--visibility` (hr): the ray caster, `obvhs` or `core`.
+    pub visibility: Option<String>,
+    /// `--elements` (exact): element budget.
+    pub elements: Option<u64>,
+    /// `--threads` asked; `null` for every core.
+    pub threads: Option<u32>,
+    /// The picture's settings (`null` without `--image`).
+    pub image: Option<ImageSettings>,
+}
+
+/// How the picture was made.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ImageSettings {
+    /// Width and height in pixels.
+    pub size: [u32; 2],
+    /// The camera used, in `--camera` form (position, target, up, vertical field of view).
+    pub camera: String,
+    /// Samples per pixel side.
+    pub supersample: u32,
+    /// `--display-bands` as given (`null`: the default for the scene's bands).
+    pub display_bands: Option<String>,
+}
+
+/// A file the run wrote.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OutputFile {
+    /// The option that named it (`--results`, `--image`, `--stats`).
+    pub option: String,
+    /// Its path as given.
+    pub path: String,
+}
+
+/// Whether the run's numbers are right, and why not.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Verdict {
+    /// True when every check passed (the run exits 0).
+    pub passed: bool,
+    /// Why it failed, or what it passed with (a warning about the power balance), or
+    /// "every check passed".
+    pub reason: String,
+}
+
 /// Settings, counts, time, memory and error of one solve.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SolveReport {
+    /// The hirad version that ran.
+    #[serde(default)]
+    pub hirad_version: String,
+    /// The scene file as given.
+    #[serde(default)]
+    pub scene: String,
+    /// Every setting of the run.
+    #[serde(default)]
+    pub settings: Option<RunSettings>,
+    /// The files written (this stats file included).
+    #[serde(default)]
+    pub outputs: Vec<OutputFile>,
+    /// Whether the numbers are right (`null` in files from before verdicts).
+    #[serde(default)]
+    pub verdict: Option<Verdict>,
     /// Solver: `hr` (hierarchical with instantiation) or `exact`.
     pub method: String,
     /// Refinement threshold epsilon (dimensionless: a link is refined while its transfer
-    /// exceeds epsilon times the scene's emitted power).
-    pub epsilon: f64,
+    /// exceeds epsilon times the scene's emitted power); `null` for the exact solver, which
+    /// has none.
+    pub epsilon: Option<f64>,
     /// Worker threads.
     pub threads: u32,
     /// Polygons of the expanded scene (rows of the results table).
@@ -96,7 +179,8 @@ pub struct SolveReport {
     /// when not estimated.
     #[serde(default)]
     pub remaining_change: Option<f64>,
-    /// Where the power went, per band (hr; empty for the exact solver).
+    /// Where the power went, per band (both solvers; the exact solver's escaped and
+    /// back-absorbed light come from rays, see `exact::balance`).
     #[serde(default)]
     pub power: Vec<BandPower>,
     /// Seconds per phase, in the order the phases first ran (hr; empty for the exact
@@ -165,21 +249,33 @@ impl SolveReport {
 
     /// The human summary: settings, time, peak memory, links, elements and error.
     pub fn print_summary(&self, out: &mut dyn Write) -> io::Result<()> {
+        let epsilon = self
+            .epsilon
+            .map(|e| format!(", epsilon {e}"))
+            .unwrap_or_default();
+        let memory = if self.method == "exact" {
+            "form factor matrix"
+        } else {
+            "workspace"
+        };
         writeln!(
             out,
-            "solve: method {}, epsilon {}, {} thread{}, workspace {}",
+            "solve: method {}{epsilon}, {} thread{}, {memory} {}",
             self.method,
-            self.epsilon,
             self.threads,
             if self.threads == 1 { "" } else { "s" },
             bytes(self.workspace_bytes)
         )?;
-        writeln!(
-            out,
-            "  time {:.3} s, peak memory {} of the workspace",
-            self.seconds,
-            bytes(self.peak_workspace_bytes)
-        )?;
+        if self.method == "exact" {
+            writeln!(out, "  time {:.3} s", self.seconds)?;
+        } else {
+            writeln!(
+                out,
+                "  time {:.3} s, peak memory {} of the workspace",
+                self.seconds,
+                bytes(self.peak_workspace_bytes)
+            )?;
+        }
         if !self.phases.is_empty() {
             let parts: Vec<String> = self
                 .phases

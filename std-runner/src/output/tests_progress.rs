@@ -118,3 +118,55 @@ fn a_new_phase_and_a_finished_one_are_drawn_at_once() {
     p.set(10);
     assert!(out.text().contains("10/10 100%"), "{}", out.text());
 }
+
+#[test]
+fn without_a_terminal_plain_lines_a_phase_each_and_few() {
+    use super::progress::{LOG_EVERY, LOG_MIN, log_line};
+    let out = Shared::default();
+    let t0 = Instant::now();
+    let p = Progress::with_lines(Box::new(out.clone()));
+    p.phase("loading", None);
+    p.set_at(0, t0 + Duration::from_millis(500));
+    assert_eq!(out.text(), "", "silent for the first second");
+    p.set_at(0, t0 + Duration::from_millis(1100));
+    assert_eq!(out.text().lines().count(), 1, "{}", out.text());
+    p.phase("lighting patches", Some(100));
+    // A new phase within LOG_MIN of the last line waits; counts within a phase wait for
+    // LOG_EVERY.
+    p.set_at(10, t0 + Duration::from_millis(1100) + LOG_MIN / 2);
+    assert_eq!(out.text().lines().count(), 1, "{}", out.text());
+    p.set_at(20, t0 + Duration::from_millis(1100) + LOG_MIN);
+    assert_eq!(out.text().lines().count(), 2, "{}", out.text());
+    for k in 0..50u32 {
+        p.set_at(
+            21 + u64::from(k),
+            t0 + Duration::from_millis(1100) + LOG_MIN + LOG_EVERY * k / 50,
+        );
+    }
+    assert_eq!(out.text().lines().count(), 2, "{}", out.text());
+    p.set_at(90, t0 + Duration::from_millis(1100) + LOG_MIN + LOG_EVERY);
+    let text = out.text();
+    assert_eq!(text.lines().count(), 3, "{text}");
+    assert!(
+        !text.contains('\x1b') && !text.contains('\r'),
+        "no escape codes: {text:?}"
+    );
+    assert!(
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .contains("lighting patches 20/100 (20%)"),
+        "{text}"
+    );
+    assert!(text.lines().all(|l| l.starts_with("progress ")), "{text}");
+    p.finish();
+    assert_eq!(out.text(), text, "nothing to clear");
+    assert_eq!(
+        log_line("solving (iterations)", 7, None, Duration::from_secs(3)),
+        "progress 3.0 s: solving (iterations): 7"
+    );
+    assert_eq!(
+        log_line("meshing", 0, None, Duration::from_secs(3)),
+        "progress 3.0 s: meshing"
+    );
+}

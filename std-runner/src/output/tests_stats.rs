@@ -1,12 +1,46 @@
 //! The stats report: JSON round trip with every field, and the summary text.
 
 use super::reference::{Comparison, WorstPolygon};
-use super::stats::{BandPower, PhaseTime, RaysByPhase, SolveReport, bytes};
+use super::stats::{
+    BandPower, ImageSettings, OutputFile, PhaseTime, RaysByPhase, RunSettings, SolveReport,
+    Verdict, bytes,
+};
 
 fn report() -> SolveReport {
     SolveReport {
+        hirad_version: "0.1.0".into(),
+        scene: "maize.hirb".into(),
+        settings: Some(RunSettings {
+            method: "hr".into(),
+            epsilon: Some(0.001),
+            rays: Some(4),
+            final_rays: Some("auto".into()),
+            final_passes: Some("2".into()),
+            min_area: Some(1e-6),
+            tolerance: 1e-4,
+            max_iterations: Some(20_000),
+            max_imbalance_percent: Some(5.0),
+            memory_bytes: None,
+            visibility: Some("obvhs".into()),
+            elements: None,
+            threads: Some(4),
+            image: Some(ImageSettings {
+                size: [64, 48],
+                camera: "0,0,5,0,0,0,0,1,0,40".into(),
+                supersample: 2,
+                display_bands: Some("par".into()),
+            }),
+        }),
+        outputs: vec![OutputFile {
+            option: "--stats".into(),
+            path: "s.json".into(),
+        }],
+        verdict: Some(Verdict {
+            passed: false,
+            reason: "the solution did not converge".into(),
+        }),
         method: "hr".into(),
-        epsilon: 0.001,
+        epsilon: Some(0.001),
         threads: 4,
         polygons: 17,
         elements: 1234,
@@ -74,6 +108,23 @@ fn summary_tells_power_and_convergence() {
     // Old JSON without the new fields reads as converged, with no balance.
     let old = SolveReport::from_json(r#"{"method":"hr","epsilon":0.001,"threads":1,"polygons":1,"elements":1,"links":1,"iterations":1,"refinement_passes":1,"seconds":0.1,"peak_workspace_bytes":1,"workspace_bytes":1,"budget_limited":false,"error_percent":null}"#).unwrap();
     assert!(old.converged && old.power.is_empty() && old.remaining_change.is_none());
+    assert!(old.verdict.is_none() && old.settings.is_none() && old.scene.is_empty());
+    // The exact solver names no epsilon and no workspace.
+    let mut exact = report();
+    exact.method = "exact".into();
+    exact.epsilon = None;
+    exact.budget_limited = false;
+    let mut text = Vec::new();
+    exact.print_summary(&mut text).unwrap();
+    let text = String::from_utf8(text).unwrap();
+    assert!(
+        text.starts_with("solve: method exact, 4 threads, form factor matrix"),
+        "{text}"
+    );
+    assert!(
+        !text.contains("epsilon") && !text.contains("workspace"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -81,6 +132,16 @@ fn json_round_trip_holds_every_field() {
     let mut r = report();
     let text = r.to_json();
     for field in [
+        "hirad_version",
+        "scene",
+        "settings",
+        "final_rays",
+        "max_imbalance_percent",
+        "image",
+        "outputs",
+        "verdict",
+        "passed",
+        "reason",
         "method",
         "epsilon",
         "threads",

@@ -9,7 +9,7 @@ use std::time::Instant;
 use crate::output::Progress;
 use crate::scene::{self, ExpandVisitor, ExpandedNode, Scene};
 use crate::visibility::ObvhsVisibility;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow};
 use glam::Vec3;
 use hirad_core::hr::{self, HrError, Plan, Settings, SolveError, Stats};
 use hirad_core::sink::Sink;
@@ -127,6 +127,23 @@ impl hr::Progress for ProgressAdapter<'_> {
     }
 }
 
+/// The exit class of a solver error (see [`crate::exit`]): the scene's faults are input
+/// errors, the settings' usage errors, a diverged solution results that are not right.
+fn classify(e: HrError) -> anyhow::Error {
+    let error = anyhow!("{e}");
+    match e {
+        HrError::Image(_)
+        | HrError::SceneTooLarge
+        | HrError::NoLight
+        | HrError::Empty
+        | HrError::BadGeometry { .. }
+        | HrError::NoSteadyState { .. } => crate::exit::input(error),
+        HrError::WorkspaceTooSmall { .. } | HrError::Settings(_) => crate::exit::usage(error),
+        HrError::Diverged { .. } => crate::exit::not_right(error),
+        HrError::ScratchTooSmall => error,
+    }
+}
+
 /// Workspaces up to this size (bytes) are allocated without a probe first (see `solve_hr`).
 const PROBE_ABOVE: usize = 32 << 20;
 
@@ -143,18 +160,18 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     sink: &mut K,
 ) -> Result<HrRun> {
     let setup = Instant::now();
-    let bytes = scene::compile(scene).map_err(|e| anyhow!("{e}"))?;
-    let view = scene::read_image(&bytes).map_err(|e| anyhow!("{e}"))?;
+    let bytes = scene::compile(scene).map_err(|e| crate::exit::input(anyhow!("{e}")))?;
+    let view = scene::read_image(&bytes).map_err(|e| crate::exit::input(anyhow!("{e}")))?;
     let internal = visibility == VisibilityChoice::Core;
     let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
-    let plan = hr::plan(&view, settings, internal, &mut scratch).map_err(|e| anyhow!("{e}"))?;
+    let plan = hr::plan(&view, settings, internal, &mut scratch).map_err(classify)?;
     let size = memory.unwrap_or(plan.suggested_bytes);
     if size < plan.min_bytes {
-        bail!(
+        return Err(crate::exit::usage(anyhow!(
             "--memory {size} is too small for this scene: the coarsest solution needs {} bytes (suggested: {})",
             plan.min_bytes,
             plan.suggested_bytes
-        );
+        )));
     }
     let size =
         usize::try_from(size).context("--memory does not fit this machine's address space")?;
@@ -214,9 +231,9 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     progress.finish();
     let stats = result.map_err(|e| match e {
         SolveError::Hr(HrError::WorkspaceTooSmall { needed }) => {
-            anyhow!("the workspace ({size} bytes) cannot hold even the coarsest solution: it needs {needed} bytes")
+            crate::exit::usage(anyhow!("the workspace ({size} bytes) cannot hold even the coarsest solution: it needs {needed} bytes"))
         }
-        SolveError::Hr(e) => anyhow!("{e}"),
+        SolveError::Hr(e) => classify(e),
         SolveError::Sink(e) => e,
     })?;
     Ok(HrRun {
