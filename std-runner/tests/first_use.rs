@@ -87,7 +87,7 @@ fn absurd_values_get_a_clear_answer() {
         let out = hirad(args);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(
-            matches!(out.status.code(), Some(1 | 2)),
+            out.status.code() == Some(2),
             "{args:?}: status {:?}",
             out.status
         );
@@ -403,9 +403,12 @@ fn results_keep_the_obj_face_number() {
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    assert_eq!(header.last(), Some(&"face"), "{header:?}");
+    let at = header
+        .iter()
+        .position(|&c| c == "face")
+        .expect("a face column");
     let faces: Vec<u64> = lines
-        .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+        .map(|l| l.split(',').nth(at).unwrap().parse().unwrap())
         .collect();
     let pentagon = faces.iter().filter(|&&f| f == 4).count();
     assert!(pentagon >= 2, "the pentagon was not split: {faces:?}");

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{fails, fixture, hirad, ok, s};
+use common::{fails, fails_with, fixture, hirad, ok, s, write};
 
 /// Mean of a channel over a block of pixels.
 fn mean(f: &hirad::output::Frame, ch: usize, x0: u32, y0: u32, w: u32, h: u32) -> f32 {
@@ -560,6 +560,73 @@ fn an_output_that_is_a_pipe_or_device_is_written_into_not_replaced() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = reader.join().unwrap();
-    assert!(text.starts_with("id,area,"), "{text}");
+    assert!(text.starts_with("id,area_m2,"), "{text}");
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+}
+
+/// Every error class ends with its own status, whatever the command: usage 2, input 3, not
+/// right 1 (with the outputs written); documented in README.md and `hirad::exit`.
+#[test]
+fn exit_statuses_by_class() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cornell = fixture("cornell_box.hir");
+    let bad = write(d, "bad.hir", "hirad 1\nbands 1\nmaterial m { rho 2 }\n");
+    let missing = d.join("missing.hir");
+    // Usage: the command line.
+    for args in [
+        vec!["solve", s(&cornell), "--epsilon", "-1"],
+        vec!["solve", s(&cornell), "--tolerance", "0"],
+        vec!["solve", s(&cornell), "--frobnicate"],
+        vec!["solve", s(&cornell), "--results", "/nonexistent-dir/r.csv"],
+        vec!["solve", s(&cornell), "--image", "x.bmp"],
+        vec!["solve", s(&cornell), "--memory", "1K"],
+        vec!["gen", "room", "-o", "room.txt"],
+        vec!["flatten", s(&cornell), "-o", "x.hir"],
+    ] {
+        let e = fails_with(2, &args);
+        assert!(e.contains("error"), "{args:?}: {e}");
+    }
+    // Input: a file the run reads.
+    for args in [
+        vec!["solve", s(&bad)],
+        vec!["solve", s(&missing)],
+        vec!["info", s(&bad)],
+        vec!["convert", s(&bad), "-o", "x.hirb"],
+        vec!["solve", s(&cornell), "--reference", s(&bad)],
+    ] {
+        let e = fails_with(3, &args);
+        assert!(
+            e.contains(s(&bad)) || e.contains(s(&missing)),
+            "{args:?}: {e}"
+        );
+    }
+    // Not right: the run finished, wrote its outputs, and says why it failed; the stats
+    // record the verdict.
+    let (r, j) = (d.join("r.csv"), d.join("s.json"));
+    let e = fails_with(
+        1,
+        &[
+            "solve",
+            s(&cornell),
+            "--max-imbalance",
+            "0",
+            "--results",
+            s(&r),
+            "--stats",
+            s(&j),
+        ],
+    );
+    assert!(e.contains("--max-imbalance"), "{e}");
+    assert!(r.exists());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&j).unwrap()).unwrap();
+    assert_eq!(json["verdict"]["passed"], false, "{json}");
+    assert!(
+        json["verdict"]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("power balance"),
+        "{json}"
+    );
 }

@@ -83,6 +83,7 @@ impl Progress {
     }
 
     /// A reporter writing plain lines to any writer (for tests).
+    #[cfg(test)]
     pub(crate) fn with_lines(out: Box<dyn Write + Send>) -> Self {
         let mut p = Self::with_output(true, out);
         p.lines = true;

@@ -23,11 +23,29 @@ pub fn ok(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
-/// Runs a command that must fail with status 1 and no panic; returns its stderr.
+/// Runs a command that must fail with one of the documented error statuses (1 not right,
+/// 2 usage, 3 input, 4 failed; see `hirad::exit`) and no panic; returns its stderr.
 pub fn fails(args: &[&str]) -> String {
     let out = hirad(args);
-    assert_eq!(out.status.code(), Some(1), "hirad {args:?}: exit status");
     let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        matches!(out.status.code(), Some(1..=4)),
+        "hirad {args:?}: exit status {:?}\n{err}",
+        out.status
+    );
+    assert!(!err.contains("panicked"), "hirad {args:?} panicked:\n{err}");
+    err
+}
+
+/// Runs a command that must fail with exactly `status` and no panic; returns its stderr.
+pub fn fails_with(status: i32, args: &[&str]) -> String {
+    let out = hirad(args);
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(status),
+        "hirad {args:?}: exit status\n{err}"
+    );
     assert!(!err.contains("panicked"), "hirad {args:?} panicked:\n{err}");
     err
 }
