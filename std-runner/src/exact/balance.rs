@@ -108,9 +108,9 @@ pub fn balance<V: Visibility + ?Sized>(
                     visibility,
                 );
                 out.rays += u64::from(RAYS_PER_SIDE);
-                for k in 0..bands {
-                    out.escaped[k] += seen * b[k] * escaped;
-                    out.absorbed_backs[k] += seen * b[k] * backs;
+                for (k, &bk) in b.iter().enumerate() {
+                    out.escaped[k] += seen * bk * escaped;
+                    out.absorbed_backs[k] += seen * bk * backs;
                 }
             }
             out
