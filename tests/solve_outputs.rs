@@ -207,7 +207,7 @@ fn reference_error_and_stats() {
     // The stats file carries the error.
     let mut report = SolveReport {
         method: "hr".into(),
-        epsilon: 0.01,
+        epsilon: Some(0.01),
         threads: 2,
         polygons: 17,
         elements: 40,
