@@ -69,6 +69,11 @@ pub struct Args {
     /// (PAR/NIR, as colour-infrared pictures), the first three as R,G,B otherwise.
     #[arg(long)]
     pub display_bands: Option<String>,
+    /// How an image colours the patches: `smooth` interpolates radiosity across the corners
+    /// patches share on one surface (not across creases over 30 degrees or material
+    /// boundaries); `flat` shows every element in its own value (the mesh).
+    #[arg(long, value_enum, default_value_t = output::Shading::Smooth)]
+    pub shading: output::Shading,
     /// Samples per pixel side (N x N per pixel; default 1).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::output::raster::MAX_SUPERSAMPLE as i64))]
     pub supersample: Option<u32>,
@@ -264,7 +269,8 @@ pub fn run(a: Args) -> Result<()> {
             a.supersample.unwrap_or(1),
             bands,
             &scene.band_names,
-        )?;
+        )?
+        .with_shading(a.shading);
         if sink.is_png() {
             let display = match &a.display_bands {
                 Some(spec) => output::DisplayBands::parse(spec, bands, &scene.band_names)

@@ -7,6 +7,7 @@ use super::exr_file::write_exr;
 use super::frame::{Frame, channel_names};
 use super::png_file::{DisplayBands, write_png};
 use super::raster::Rasterizer;
+use super::smooth::PatchStore;
 use crate::files::{persist, temp_beside};
 use crate::scene::Camera;
 use anyhow::{anyhow, bail};
@@ -41,6 +42,17 @@ impl ImageFormat {
     }
 }
 
+/// How patches are coloured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Shading {
+    /// Radiosity interpolated across the corners patches share on one surface (see
+    /// [`super::smooth`]); keeps every patch in memory until the image is written.
+    #[default]
+    Smooth,
+    /// Every patch (element) in its own flat radiosity: shows the mesh.
+    Flat,
+}
+
 /// An image being rendered into memory, written to its file by [`ImageSink::finish`].
 #[derive(Clone, Debug)]
 pub struct ImageSink {
@@ -49,6 +61,10 @@ pub struct ImageSink {
     raster: Rasterizer,
     channels: Vec<String>,
     display: DisplayBands,
+    /// The patches, kept for smooth shading (`None`: flat).
+    store: Option<PatchStore>,
+    /// Whether the framebuffer shows the smoothed values of every stored patch.
+    shaded: bool,
 }
 
 impl ImageSink {
@@ -64,15 +80,53 @@ impl ImageSink {
         band_names: &[String],
     ) -> anyhow::Result<Self> {
         let format = ImageFormat::of(path)?;
-        let raster = Rasterizer::new(camera, size, supersample, bands)
+        let mut raster = Rasterizer::new(camera, size, supersample, bands)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        raster.track_owners();
         Ok(ImageSink {
             path: path.to_path_buf(),
             format,
             raster,
             channels: channel_names(bands, band_names),
             display: DisplayBands::default_for(bands),
+            store: Some(PatchStore::new(bands)),
+            shaded: true,
         })
+    }
+
+    /// Chooses how patches are coloured (default smooth); call before any patch arrives.
+    pub fn with_shading(mut self, shading: Shading) -> Self {
+        self.store = match shading {
+            Shading::Smooth => Some(PatchStore::new(self.raster.bands())),
+            Shading::Flat => None,
+        };
+        self
+    }
+
+    /// Colours the samples of every stored patch from its smoothed corner values.
+    fn shade(&mut self) {
+        let Some(store) = &self.store else {
+            return;
+        };
+        if self.shaded {
+            return;
+        }
+        let values = store.corner_values();
+        let bands = self.raster.bands();
+        for i in 0..store.len() {
+            let p = store.patch(i);
+            let n = p.corners().len();
+            let side = |s: usize| {
+                if s == 1 && !p.two_sided {
+                    &[][..]
+                } else {
+                    &values.get(i, s)[..n * bands]
+                }
+            };
+            self.raster
+                .shade(i as u32, p.corners(), p.normal, [side(0), side(1)]);
+        }
+        self.shaded = true;
     }
 
     /// Shows `display` in the PNG's red, green and blue (an EXR keeps every band).
@@ -86,8 +140,10 @@ impl ImageSink {
         self.format == ImageFormat::Png
     }
 
-    /// The image as rendered so far (linear radiance, W/m^2/sr).
-    pub fn frame(&self) -> Frame {
+    /// The image as rendered so far (linear radiance, W/m^2/sr), smoothed when shading is
+    /// smooth.
+    pub fn frame(&mut self) -> Frame {
+        self.shade();
         self.raster.frame(self.channels.clone())
     }
 
@@ -122,7 +178,7 @@ impl ImageSink {
     }
 
     /// Writes the file: a temporary name beside it, renamed into place when complete.
-    pub fn finish(self) -> anyhow::Result<()> {
+    pub fn finish(mut self) -> anyhow::Result<()> {
         let frame = self.frame();
         let path = &self.path;
         let tmp = temp_beside(path)?;
@@ -147,7 +203,12 @@ impl Sink for ImageSink {
     fn patch(&mut self, patch: &PatchResult<'_>) -> anyhow::Result<()> {
         self.raster
             .patch(patch)
-            .map_err(|e| anyhow!("{}: {e}", self.path.display()))
+            .map_err(|e| anyhow!("{}: {e}", self.path.display()))?;
+        if let Some(store) = &mut self.store {
+            store.push(patch);
+            self.shaded = false;
+        }
+        Ok(())
     }
 
     fn polygon(&mut self, _: &PolygonResult<'_>) -> anyhow::Result<()> {

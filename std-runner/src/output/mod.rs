@@ -9,6 +9,7 @@ pub mod camera;
 pub mod exr_file;
 pub mod frame;
 pub mod image;
+pub mod interp;
 pub mod outputs;
 pub mod png_file;
 pub mod progress;
@@ -16,8 +17,10 @@ pub mod raster;
 pub mod reference;
 pub mod results;
 pub mod results_read;
+pub mod smooth;
 pub mod stats;
 pub mod view;
+pub mod weld;
 
 pub use camera::{
     OptionError, Projection, Size, camera_arg, check_camera, default_camera, default_camera_up,
@@ -25,7 +28,7 @@ pub use camera::{
 };
 pub use exr_file::{read_exr, write_exr};
 pub use frame::{Frame, channel_names};
-pub use image::{ImageFormat, ImageSink};
+pub use image::{ImageFormat, ImageSink, Shading};
 pub use outputs::Outputs;
 pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png};
 pub use progress::Progress;
