@@ -3,9 +3,11 @@
 //! through a temporary file renamed into place.
 
 use super::camera::Size;
+use super::colorbar::map_pixels;
+use super::display::Display;
 use super::exr_file::write_exr;
 use super::frame::{Frame, channel_names};
-use super::png_file::{DisplayBands, write_png};
+use super::png_file::{write_png, write_rgb_png};
 use super::raster::Rasterizer;
 use super::smooth::PatchStore;
 use crate::files::{persist, temp_beside};
@@ -60,7 +62,7 @@ pub struct ImageSink {
     format: ImageFormat,
     raster: Rasterizer,
     channels: Vec<String>,
-    display: DisplayBands,
+    display: Display,
     /// The patches, kept for smooth shading (`None`: flat).
     store: Option<PatchStore>,
     /// Whether the framebuffer shows the smoothed values of every stored patch.
@@ -88,7 +90,7 @@ impl ImageSink {
             format,
             raster,
             channels: channel_names(bands, band_names),
-            display: DisplayBands::default_for(bands),
+            display: Display::default_for(bands, band_names),
             store: Some(PatchStore::new(bands)),
             shaded: true,
         })
@@ -129,9 +131,10 @@ impl ImageSink {
         self.shaded = true;
     }
 
-    /// Shows `display` in the PNG's red, green and blue (an EXR keeps every band).
-    pub fn with_display(mut self, display: DisplayBands) -> Self {
-        self.display = display;
+    /// Shows `display` in the PNG (an EXR keeps every band). Default:
+    /// [`Display::default_for`].
+    pub fn with_display(mut self, display: impl Into<Display>) -> Self {
+        self.display = display.into();
         self
     }
 
@@ -185,7 +188,13 @@ impl ImageSink {
         let mut w = BufWriter::new(tmp);
         match self.format {
             ImageFormat::Exr => write_exr(&frame, &mut w),
-            ImageFormat::Png => write_png(&frame, self.display, &mut w),
+            ImageFormat::Png => match &self.display {
+                Display::Bands(d) => write_png(&frame, *d, &mut w),
+                Display::Map(m) => {
+                    let (rgb, _) = map_pixels(&frame, m);
+                    write_rgb_png(frame.width, frame.height, &rgb, &mut w)
+                }
+            },
         }
         .map_err(|e| anyhow!("{}: {e:#}", path.display()))?;
         w.flush()

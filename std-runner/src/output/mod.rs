@@ -6,7 +6,11 @@
 //! image radiance.
 
 pub mod camera;
+pub mod colorbar;
+pub mod colormap;
+pub mod display;
 pub mod exr_file;
+pub mod font;
 pub mod frame;
 pub mod image;
 pub mod interp;
@@ -26,11 +30,12 @@ pub use camera::{
     OptionError, Projection, Size, camera_arg, check_camera, default_camera, default_camera_up,
     parse_camera, parse_size, scene_bounds,
 };
+pub use display::{Display, DisplayMode};
 pub use exr_file::{read_exr, write_exr};
 pub use frame::{Frame, channel_names};
 pub use image::{ImageFormat, ImageSink, Shading};
 pub use outputs::Outputs;
-pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png};
+pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png, write_rgb_png};
 pub use progress::Progress;
 pub use raster::Rasterizer;
 pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compare};
