@@ -46,6 +46,8 @@ pub use stats::{BandPower, PhaseTime, RaysByPhase, SolveReport};
 #[cfg(test)]
 mod tests_camera;
 #[cfg(test)]
+mod tests_colormap;
+#[cfg(test)]
 mod tests_image;
 #[cfg(test)]
 mod tests_progress;
@@ -53,5 +55,7 @@ mod tests_progress;
 mod tests_reference;
 #[cfg(test)]
 mod tests_results;
+#[cfg(test)]
+mod tests_smooth;
 #[cfg(test)]
 mod tests_stats;

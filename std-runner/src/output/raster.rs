@@ -290,7 +290,7 @@ impl Rasterizer {
                 // Perspective-correct point: camera-space position is affine in l / z.
                 let lw = [l[0] * v[0][2], l[1] * v[1][2], l[2] * v[2][2]];
                 let sum = lw[0] + lw[1] + lw[2];
-                if !(sum > 0.0) {
+                if sum.is_nan() || sum <= 0.0 {
                     return;
                 }
                 let p =
