@@ -9,6 +9,7 @@ use super::exr_file::write_exr;
 use super::frame::{Frame, channel_names};
 use super::png_file::{write_png, write_rgb_png};
 use super::raster::Rasterizer;
+use super::shade::shade_all;
 use super::smooth::PatchStore;
 use crate::files::{persist, temp_beside};
 use crate::scene::Camera;
@@ -113,21 +114,7 @@ impl ImageSink {
         if self.shaded {
             return;
         }
-        let values = store.corner_values();
-        let bands = self.raster.bands();
-        for i in 0..store.len() {
-            let p = store.patch(i);
-            let n = p.corners().len();
-            let side = |s: usize| {
-                if s == 1 && !p.two_sided {
-                    &[][..]
-                } else {
-                    &values.get(i, s)[..n * bands]
-                }
-            };
-            self.raster
-                .shade(i as u32, p.corners(), p.normal, [side(0), side(1)]);
-        }
+        shade_all(&mut self.raster, store);
         self.shaded = true;
     }
 

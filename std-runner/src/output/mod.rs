@@ -21,6 +21,7 @@ pub mod raster;
 pub mod reference;
 pub mod results;
 pub mod results_read;
+pub mod shade;
 pub mod smooth;
 pub mod stats;
 pub mod view;

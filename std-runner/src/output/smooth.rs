@@ -9,9 +9,9 @@
 //! back with back) and their normals differ by at most [`CREASE_DEG`]; a box's edges, a
 //! leaf's two faces and a wall meeting a floor of another material stay sharp.
 //!
-//! Limitation: a patch's own interior is interpolated from its corners only, so along an
-//! edge with T-junctions the large patch and its small neighbours may still differ a little
-//! between the junctions (a crack in value, not in geometry).
+//! A patch with T-junctions on its edges is drawn as a fan of triangles from its centre
+//! (value: the mean of its corners') through its corners and junctions, so that its values
+//! along such an edge are those of the small neighbours: no crack in value at the junction.
 
 use super::weld::{OnEdges, weld};
 use glam::{DVec3, Vec3};
@@ -135,7 +135,7 @@ impl PatchStore {
         first.push(points.len());
         let welded = weld(&points);
         let areas: Vec<f64> = self.patches.iter().map(StoredPatch::area).collect();
-        // Per vertex, the patches that meet there: (patch, corner or NO_CORNER).
+        // Per vertex, the patches that meet there: (vertex, patch, corner or EDGE + edge).
         let mut meets: Vec<(u32, u32, u8)> = Vec::new();
         for i in 0..n {
             for k in 0..first[i + 1] - first[i] {
@@ -159,7 +159,7 @@ impl PatchStore {
                 for k in 0..c.len() {
                     on_edges.inside(c[k], c[(k + 1) % c.len()], &mut inside);
                     for &v in inside.iter().filter(|v| !own.contains(v)) {
-                        meets.push((v, i as u32, NO_CORNER));
+                        meets.push((v, i as u32, EDGE + k as u8));
                     }
                 }
             }
@@ -167,8 +167,22 @@ impl PatchStore {
         meets.sort_unstable();
         let cos_crease = CREASE_DEG.to_radians().cos();
         let mut sum = vec![0.0f64; bands];
+        let mut junctions = Vec::new();
         for group in meets.chunk_by(|a, b| a.0 == b.0) {
-            for &(_, i, k) in group.iter().filter(|m| m.2 != NO_CORNER) {
+            for &(v, i, k) in group {
+                let mut junction = (k >= EDGE).then(|| {
+                    let c = self.patches[i as usize].corners();
+                    let e = usize::from(k - EDGE);
+                    let (a, b) = (c[e].as_dvec3(), c[(e + 1) % c.len()].as_dvec3());
+                    let at = welded.positions[v as usize];
+                    Junction {
+                        patch: i,
+                        edge: k - EDGE,
+                        t: (at - a).dot(b - a) / (b - a).length_squared(),
+                        at: at.as_vec3(),
+                        values: vec![0.0; 2 * bands],
+                    }
+                });
                 let p = &self.patches[i as usize];
                 let sides = if p.two_sided { 2 } else { 1 };
                 for side in 0..sides {
@@ -188,30 +202,75 @@ impl PatchStore {
                             *s += w * f64::from(*v);
                         }
                     }
-                    let at = ((i as usize * 2 + side) * 4 + usize::from(k)) * bands;
                     let own = self.radiosity(i as usize, side);
+                    let out = match &mut junction {
+                        Some(j) => &mut j.values[side * bands..(side + 1) * bands],
+                        None => {
+                            let at = ((i as usize * 2 + side) * 4 + usize::from(k)) * bands;
+                            &mut values[at..at + bands]
+                        }
+                    };
                     for b in 0..bands {
-                        values[at + b] = if weight > 0.0 {
+                        out[b] = if weight > 0.0 {
                             (sum[b] / weight) as f32
                         } else {
                             own[b]
                         };
                     }
                 }
+                junctions.extend(junction);
             }
         }
-        CornerValues { bands, values }
+        junctions.sort_by(|a: &Junction, b: &Junction| {
+            (a.patch, a.edge)
+                .cmp(&(b.patch, b.edge))
+                .then(a.t.total_cmp(&b.t))
+        });
+        let mut first_junction = vec![0usize; n + 1];
+        for j in &junctions {
+            first_junction[j.patch as usize + 1] += 1;
+        }
+        for i in 0..n {
+            first_junction[i + 1] += first_junction[i];
+        }
+        CornerValues {
+            bands,
+            values,
+            junctions,
+            first_junction,
+        }
     }
 }
 
-/// Marks a patch that meets a vertex with an edge, not a corner.
-const NO_CORNER: u8 = u8::MAX;
+/// Codes a patch's edge `k` (it meets a vertex inside that edge) as `EDGE + k`; corners
+/// are `0..4`.
+const EDGE: u8 = 4;
 
-/// Radiosity (W/m^2) per patch, side and corner.
+/// A vertex inside a patch's edge (a T-junction) with the patch's smoothed value there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Junction {
+    /// The patch.
+    pub patch: u32,
+    /// Its edge, from corner `edge` to the next.
+    pub edge: u8,
+    /// Where along the edge, in (0, 1).
+    pub t: f64,
+    /// The vertex (m).
+    pub at: Vec3,
+    /// Radiosity (W/m^2), `bands` for the front, then `bands` for the back (zeros when
+    /// one-sided).
+    pub values: Vec<f32>,
+}
+
+/// Radiosity (W/m^2) per patch, side and corner, and at the T-junctions on patch edges.
 #[derive(Clone, Debug)]
 pub struct CornerValues {
     bands: usize,
     values: Vec<f32>,
+    /// By patch, edge and position along it.
+    junctions: Vec<Junction>,
+    /// Per patch, its first junction; one more entry at the end.
+    first_junction: Vec<usize>,
 }
 
 impl CornerValues {
@@ -219,5 +278,10 @@ impl CornerValues {
     pub fn get(&self, i: usize, side: usize) -> &[f32] {
         let at = (i * 2 + side) * 4 * self.bands;
         &self.values[at..at + 4 * self.bands]
+    }
+
+    /// The T-junctions on patch `i`'s edges, in order around it.
+    pub fn junctions(&self, i: usize) -> &[Junction] {
+        &self.junctions[self.first_junction[i]..self.first_junction[i + 1]]
     }
 }

@@ -366,3 +366,25 @@ fn smooth_shading_keeps_the_depth_order() {
         assert_eq!(*s == 0.0, *f == 0.0);
     }
 }
+
+#[test]
+fn no_crack_in_value_at_a_t_junction() {
+    // As above, drawn: along the big patch's right edge x = 1 (between pixels 59 and 60),
+    // the row at z = 0 (row 40) crosses the junction. Without the fan the big patch would
+    // show (1.4 + 1.8) / 2 = 1.6 there and the small ones 2: a jump of 0.4.
+    let patches = [
+        rect(-1.0, -1.0, 1.0, 1.0, 0.0, 1.0),
+        rect(1.0, -1.0, 2.0, 0.0, 0.0, 3.0),
+        rect(1.0, 0.0, 2.0, 1.0, 0.0, 5.0),
+    ];
+    let f = render(80, Shading::Smooth, &patches);
+    for row in [40, 39, 30, 50] {
+        let jump = (px(&f, 60, row) - px(&f, 59, row)).abs();
+        assert!(
+            jump < 0.15,
+            "row {row}: {} | {}",
+            px(&f, 59, row),
+            px(&f, 60, row)
+        );
+    }
+}
