@@ -1,6 +1,13 @@
 //! The `--image` output: a [`Sink`] that rasterises leaf patches as they stream by and, when
 //! the solve is done, writes a linear f32 EXR (`.exr`) or an 8-bit sRGB preview (`.png`)
 //! through a temporary file renamed into place.
+//!
+//! Shading (both formats): smooth by default, radiosity interpolated across the corners
+//! patches share (see [`super::smooth`]; the patches are kept, about 80 bytes each plus 8
+//! per band, a few hundred bytes more each for a moment while their shared corners are
+//! found, and the samples are coloured again when the image is written), or flat,
+//! every patch in its own value as it streams by. A PNG shows bands as colours or one band
+//! through a colour map with a bar (see [`super::display`]).
 
 use super::camera::Size;
 use super::colorbar::map_pixels;
