@@ -285,7 +285,7 @@ pub fn run(a: Args) -> Result<()> {
                 &scene.band_names,
             )
             .map_err(|e| anyhow!("{e}"))?;
-            let chosen = a.display_bands.is_some() || a.display.is_some();
+            let chosen = a.display_bands.is_some();
             if !a.quiet
                 && let Some(what) = display.note(bands, &scene.band_names, chosen)
             {

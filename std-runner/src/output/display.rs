@@ -99,8 +99,9 @@ impl Display {
         }
     }
 
-    /// The note `hirad solve` prints about a PNG: what it shows and how to choose, or
-    /// `None` when nothing needs saying (an RGB scene in its own colours).
+    /// The note `hirad solve` prints about a PNG: what it shows and, unless the bands were
+    /// `chosen` with `--display-bands`, how to choose; `None` when nothing needs saying (an
+    /// RGB scene in its own colours).
     pub fn note(&self, bands: usize, names: &[String], chosen: bool) -> Option<String> {
         let why = if chosen {
             ""
