@@ -107,8 +107,14 @@ impl ImageSink {
     /// Chooses how patches are coloured (default smooth); call before any patch arrives.
     pub fn with_shading(mut self, shading: Shading) -> Self {
         self.store = match shading {
-            Shading::Smooth => Some(PatchStore::new(self.raster.bands())),
-            Shading::Flat => None,
+            Shading::Smooth => {
+                self.raster.track_owners();
+                Some(PatchStore::new(self.raster.bands()))
+            }
+            Shading::Flat => {
+                self.raster.stop_tracking();
+                None
+            }
         };
         self
     }

@@ -230,6 +230,11 @@ impl Rasterizer {
         self.owner = vec![NO_OWNER; self.inv_depth.len()];
     }
 
+    /// Forgets which patch each sample shows (and the memory it took).
+    pub fn stop_tracking(&mut self) {
+        self.owner = Vec::new();
+    }
+
     /// Patches drawn so far (the next patch's index for [`Rasterizer::shade`]).
     pub fn drawn(&self) -> u32 {
         self.drawn
