@@ -55,8 +55,8 @@ impl ImageFormat {
 /// How patches are coloured.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Shading {
-    /// Radiosity interpolated across the corners patches share on one surface (see
-    /// [`super::smooth`]); keeps every patch in memory until the image is written.
+    /// Radiosity interpolated across the corners patches share on one surface (the
+    /// `output::smooth` module); keeps every patch in memory until the image is written.
     #[default]
     Smooth,
     /// Every patch (element) in its own flat radiosity: shows the mesh.
