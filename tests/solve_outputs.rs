@@ -76,6 +76,7 @@ where
                     id,
                     corners: &corners,
                     normal: cross.normalize(),
+                    material: p.material,
                     radiosity: [&front, &back],
                 })
                 .map_err(|e| e.to_string())?;

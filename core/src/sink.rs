@@ -13,6 +13,9 @@ pub struct PatchResult<'a> {
     pub corners: &'a [Vec3],
     /// Unit normal of the front side.
     pub normal: Vec3,
+    /// Index of the polygon's material in the scene's material list (`MaterialId`), so that
+    /// images can tell material boundaries from continuous surfaces.
+    pub material: u32,
     /// Radiosity per band (W/m^2): `[front, back]`; the back slice is empty for one-sided
     /// materials (their back emits nothing).
     pub radiosity: [&'a [f32]; 2],

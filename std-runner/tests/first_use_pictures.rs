@@ -18,8 +18,9 @@ fn png_pixels(path: &Path) -> Vec<[u8; 3]> {
         .collect()
 }
 
-/// Item 9: a two-band picture (PAR/NIR, plants' default) says which band each colour shows,
-/// and `--display-bands` chooses them.
+/// Item 9: a two-band picture (PAR/NIR, plants' default) says what it shows: by default PAR
+/// through a colour map with a bar (issue 16); `--display bands` shows the bands in false
+/// colour, saying which band each colour shows, and `--display-bands` chooses them.
 #[test]
 fn false_colour_is_explained_and_chosen() {
     let dir = tempfile::tempdir().unwrap();
@@ -40,8 +41,17 @@ fn false_colour_is_explained_and_chosen() {
         assert!(out.status.success(), "{err}");
         err
     };
+    let map = d.join("m.png");
+    let err = run(&[], &map);
+    assert!(
+        err.contains("PAR radiosity (W/m^2) through the viridis colour map")
+            && err.contains("--display bands"),
+        "{err}"
+    );
+    let px = png_pixels(&map);
+    assert!(px.contains(&[255, 255, 255]), "no labels on the colour bar");
     let false_colour = d.join("f.png");
-    let err = run(&[], &false_colour);
+    let err = run(&["--display", "bands"], &false_colour);
     assert!(
         err.contains("red = nir, green = par, blue = par") && err.contains("--display-bands"),
         "{err}"

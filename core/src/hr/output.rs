@@ -154,6 +154,7 @@ fn polygon<K: Sink>(
             id: i as u64,
             corners: &corners[..p.corner_count()],
             normal,
+            material: poly.material,
             radiosity: [front, back],
         })?;
         // Buried parts receive nothing and show only their emission.

@@ -65,11 +65,22 @@ pub struct Args {
     /// Image size in pixels, WxH (default 640x480).
     #[arg(long)]
     pub size: Option<String>,
-    /// Bands a PNG shows: one band (grey) or three as red,green,blue, by name or index, e.g.
-    /// `par`, `nir,par,par`. Default: grey for 1 band, `nir,par,par` false colour for 2
-    /// (PAR/NIR, as colour-infrared pictures), the first three as R,G,B otherwise.
+    /// What a PNG shows: `map` is one band (PAR, else the first) as radiosity (W/m^2)
+    /// through the viridis colour map with a labelled colour bar; `bands` shows bands as
+    /// colours (see --display-bands). Default: `map` for a PAR/NIR scene, else `bands`.
+    #[arg(long, value_enum)]
+    pub display: Option<output::DisplayMode>,
+    /// Bands a PNG shows as colours (implies --display bands): one band (grey) or three as
+    /// red,green,blue, by name or index, e.g. `par`, `nir,par,par`. Default: grey for 1
+    /// band, `nir,par,par` false colour for 2 (as colour-infrared pictures), the first three
+    /// as R,G,B otherwise.
     #[arg(long)]
     pub display_bands: Option<String>,
+    /// How an image colours the patches: `smooth` interpolates radiosity across the corners
+    /// patches share on one surface (not across creases over 30 degrees or material
+    /// boundaries); `flat` shows every element in its own value (the mesh).
+    #[arg(long, value_enum, default_value_t = output::Shading::Smooth)]
+    pub shading: output::Shading,
     /// Samples per pixel side (N x N per pixel; default 1).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::output::raster::MAX_SUPERSAMPLE as i64))]
     pub supersample: Option<u32>,
@@ -276,6 +287,8 @@ pub fn run(a: Args) -> Result<()> {
             camera: output::camera_arg(&camera),
             supersample: a.supersample.unwrap_or(1),
             display_bands: a.display_bands.clone(),
+            display: a.display.map(|d| format!("{d:?}").to_lowercase()),
+            shading: format!("{:?}", a.shading).to_lowercase(),
         });
         let mut sink = ImageSink::new(
             path,
@@ -285,33 +298,26 @@ pub fn run(a: Args) -> Result<()> {
             bands,
             &scene.band_names,
         )
-        .map_err(usage)?;
+        .map_err(usage)?
+        .with_shading(a.shading);
         if sink.is_png() {
-            let display = match &a.display_bands {
-                Some(spec) => output::DisplayBands::parse(spec, bands, &scene.band_names)
-                    .map_err(|e| usage(anyhow!("{e}")))?,
-                None => output::DisplayBands::default_for(bands),
-            };
-            if !a.quiet && (bands != 3 || a.display_bands.is_some()) {
-                let why = if a.display_bands.is_some() {
-                    ""
-                } else if bands == 2 {
-                    " (false colour, as colour-infrared pictures; --display-bands chooses)"
-                } else if bands > 3 {
-                    " (the first three bands; --display-bands chooses)"
-                } else {
-                    " (--display-bands chooses)"
-                };
-                eprintln!(
-                    "note: {} shows {}{why}",
-                    path.display(),
-                    display.describe(&scene.band_names)
-                );
+            let display = output::Display::choose(
+                a.display,
+                a.display_bands.as_deref(),
+                bands,
+                &scene.band_names,
+            )
+            .map_err(|e| usage(anyhow!("{e}")))?;
+            let chosen = a.display_bands.is_some();
+            if !a.quiet
+                && let Some(what) = display.note(bands, &scene.band_names, chosen)
+            {
+                eprintln!("note: {} shows {what}", path.display());
             }
             sink = sink.with_display(display);
-        } else if a.display_bands.is_some() && !a.quiet {
+        } else if (a.display_bands.is_some() || a.display.is_some()) && !a.quiet {
             eprintln!(
-                "warning: --display-bands has no effect on an EXR image (it keeps every band)"
+                "warning: --display and --display-bands have no effect on an EXR image (it keeps every band)"
             );
         }
         outputs.image = Some(sink);
@@ -693,6 +699,7 @@ fn warn_unused(a: &Args) {
             (a.camera.is_some(), "--camera"),
             (a.supersample.is_some(), "--supersample"),
             (a.display_bands.is_some(), "--display-bands"),
+            (a.display.is_some(), "--display"),
             (a.up.is_some(), "--up"),
         ] {
             if given {

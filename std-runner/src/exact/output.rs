@@ -57,6 +57,7 @@ pub fn emit<S: Sink>(
                 id: id as u64,
                 corners: el.corners(),
                 normal: el.normal,
+                material: p.material as u32,
                 radiosity: [&radiosity[0][..bands], &radiosity[1][..bands * (sides - 1)]],
             })?;
         }

@@ -1,12 +1,23 @@
 //! The `--image` output: a [`Sink`] that rasterises leaf patches as they stream by and, when
 //! the solve is done, writes a linear f32 EXR (`.exr`) or an 8-bit sRGB preview (`.png`)
 //! through a temporary file renamed into place.
+//!
+//! Shading (both formats): smooth by default, radiosity interpolated across the corners
+//! patches share (see [`super::smooth`]; the patches are kept, about 80 bytes each plus 8
+//! per band, a few hundred bytes more each for a moment while their shared corners are
+//! found, and the samples are coloured again when the image is written), or flat,
+//! every patch in its own value as it streams by. A PNG shows bands as colours or one band
+//! through a colour map with a bar (see [`super::display`]).
 
 use super::camera::Size;
+use super::colorbar::map_pixels;
+use super::display::Display;
 use super::exr_file::write_exr;
 use super::frame::{Frame, channel_names};
-use super::png_file::{DisplayBands, write_png};
+use super::png_file::{write_png, write_rgb_png};
 use super::raster::Rasterizer;
+use super::shade::shade_all;
+use super::smooth::PatchStore;
 use crate::files::{persist, temp_beside};
 use crate::scene::Camera;
 use anyhow::{anyhow, bail};
@@ -41,6 +52,17 @@ impl ImageFormat {
     }
 }
 
+/// How patches are coloured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Shading {
+    /// Radiosity interpolated across the corners patches share on one surface (the
+    /// `output::smooth` module); keeps every patch in memory until the image is written.
+    #[default]
+    Smooth,
+    /// Every patch (element) in its own flat radiosity: shows the mesh.
+    Flat,
+}
+
 /// An image being rendered into memory, written to its file by [`ImageSink::finish`].
 #[derive(Clone, Debug)]
 pub struct ImageSink {
@@ -48,7 +70,11 @@ pub struct ImageSink {
     format: ImageFormat,
     raster: Rasterizer,
     channels: Vec<String>,
-    display: DisplayBands,
+    display: Display,
+    /// The patches, kept for smooth shading (`None`: flat).
+    store: Option<PatchStore>,
+    /// Whether the framebuffer shows the smoothed values of every stored patch.
+    shaded: bool,
 }
 
 impl ImageSink {
@@ -64,20 +90,51 @@ impl ImageSink {
         band_names: &[String],
     ) -> anyhow::Result<Self> {
         let format = ImageFormat::of(path)?;
-        let raster = Rasterizer::new(camera, size, supersample, bands)
+        let mut raster = Rasterizer::new(camera, size, supersample, bands)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        raster.track_owners();
         Ok(ImageSink {
             path: path.to_path_buf(),
             format,
             raster,
             channels: channel_names(bands, band_names),
-            display: DisplayBands::default_for(bands),
+            display: Display::default_for(bands, band_names),
+            store: Some(PatchStore::new(bands)),
+            shaded: true,
         })
     }
 
-    /// Shows `display` in the PNG's red, green and blue (an EXR keeps every band).
-    pub fn with_display(mut self, display: DisplayBands) -> Self {
-        self.display = display;
+    /// Chooses how patches are coloured (default smooth); call before any patch arrives.
+    pub fn with_shading(mut self, shading: Shading) -> Self {
+        self.store = match shading {
+            Shading::Smooth => {
+                self.raster.track_owners();
+                Some(PatchStore::new(self.raster.bands()))
+            }
+            Shading::Flat => {
+                self.raster.stop_tracking();
+                None
+            }
+        };
+        self
+    }
+
+    /// Colours the samples of every stored patch from its smoothed corner values.
+    fn shade(&mut self) {
+        let Some(store) = &self.store else {
+            return;
+        };
+        if self.shaded {
+            return;
+        }
+        shade_all(&mut self.raster, store);
+        self.shaded = true;
+    }
+
+    /// Shows `display` in the PNG (an EXR keeps every band). Default:
+    /// [`Display::default_for`].
+    pub fn with_display(mut self, display: impl Into<Display>) -> Self {
+        self.display = display.into();
         self
     }
 
@@ -86,8 +143,10 @@ impl ImageSink {
         self.format == ImageFormat::Png
     }
 
-    /// The image as rendered so far (linear radiance, W/m^2/sr).
-    pub fn frame(&self) -> Frame {
+    /// The image as rendered so far (linear radiance, W/m^2/sr), smoothed when shading is
+    /// smooth.
+    pub fn frame(&mut self) -> Frame {
+        self.shade();
         self.raster.frame(self.channels.clone())
     }
 
@@ -122,14 +181,20 @@ impl ImageSink {
     }
 
     /// Writes the file: a temporary name beside it, renamed into place when complete.
-    pub fn finish(self) -> anyhow::Result<()> {
+    pub fn finish(mut self) -> anyhow::Result<()> {
         let frame = self.frame();
         let path = &self.path;
         let tmp = temp_beside(path)?;
         let mut w = BufWriter::new(tmp);
         match self.format {
             ImageFormat::Exr => write_exr(&frame, &mut w),
-            ImageFormat::Png => write_png(&frame, self.display, &mut w),
+            ImageFormat::Png => match &self.display {
+                Display::Bands(d) => write_png(&frame, *d, &mut w),
+                Display::Map(m) => {
+                    let (rgb, _) = map_pixels(&frame, m);
+                    write_rgb_png(frame.width, frame.height, &rgb, &mut w)
+                }
+            },
         }
         .map_err(|e| anyhow!("{}: {e:#}", path.display()))?;
         w.flush()
@@ -147,7 +212,12 @@ impl Sink for ImageSink {
     fn patch(&mut self, patch: &PatchResult<'_>) -> anyhow::Result<()> {
         self.raster
             .patch(patch)
-            .map_err(|e| anyhow!("{}: {e}", self.path.display()))
+            .map_err(|e| anyhow!("{}: {e}", self.path.display()))?;
+        if let Some(store) = &mut self.store {
+            store.push(patch);
+            self.shaded = false;
+        }
+        Ok(())
     }
 
     fn polygon(&mut self, _: &PolygonResult<'_>) -> anyhow::Result<()> {

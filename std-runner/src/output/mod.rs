@@ -6,10 +6,15 @@
 //! image radiance.
 
 pub mod camera;
+pub mod colorbar;
+pub mod colormap;
 pub mod columns;
+pub mod display;
 pub mod exr_file;
+pub mod font;
 pub mod frame;
 pub mod image;
+pub mod interp;
 pub mod outputs;
 pub mod png_file;
 pub mod progress;
@@ -18,18 +23,22 @@ pub mod reference;
 pub mod results;
 pub mod results_read;
 pub mod row_labels;
+pub mod shade;
+pub mod smooth;
 pub mod stats;
 pub mod view;
+pub mod weld;
 
 pub use camera::{
     OptionError, Projection, Size, camera_arg, check_camera, default_camera, default_camera_up,
     parse_camera, parse_size, scene_bounds,
 };
+pub use display::{Display, DisplayMode};
 pub use exr_file::{read_exr, write_exr};
 pub use frame::{Frame, channel_names};
-pub use image::{ImageFormat, ImageSink};
+pub use image::{ImageFormat, ImageSink, Shading};
 pub use outputs::Outputs;
-pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png};
+pub use png_file::{DisplayBands, tone_map, tone_map_with, write_png, write_rgb_png};
 pub use progress::Progress;
 pub use raster::Rasterizer;
 pub use reference::{CompareError, Comparison, ReferenceSink, WorstPolygon, compare};
@@ -43,6 +52,8 @@ pub use stats::{
 #[cfg(test)]
 mod tests_camera;
 #[cfg(test)]
+mod tests_colormap;
+#[cfg(test)]
 mod tests_image;
 #[cfg(test)]
 mod tests_progress;
@@ -50,5 +61,7 @@ mod tests_progress;
 mod tests_reference;
 #[cfg(test)]
 mod tests_results;
+#[cfg(test)]
+mod tests_smooth;
 #[cfg(test)]
 mod tests_stats;

@@ -153,7 +153,18 @@ pub fn tone_map_with(frame: &Frame, display: DisplayBands) -> Vec<u8> {
 
 /// Writes the tone-mapped frame as an 8-bit RGB PNG marked as sRGB.
 pub fn write_png(frame: &Frame, display: DisplayBands, out: impl Write) -> anyhow::Result<()> {
-    let mut encoder = png::Encoder::new(out, frame.width, frame.height);
+    write_rgb_png(
+        frame.width,
+        frame.height,
+        &tone_map_with(frame, display),
+        out,
+    )
+}
+
+/// Writes 8-bit sRGB pixels (R, G, B, row by row from the top left) of a `width` x
+/// `height` image as a PNG marked as sRGB.
+pub fn write_rgb_png(width: u32, height: u32, rgb: &[u8], out: impl Write) -> anyhow::Result<()> {
+    let mut encoder = png::Encoder::new(out, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
@@ -161,7 +172,7 @@ pub fn write_png(frame: &Frame, display: DisplayBands, out: impl Write) -> anyho
         .write_header()
         .map_err(|e| anyhow!("cannot write the PNG image: {e}"))?;
     writer
-        .write_image_data(&tone_map_with(frame, display))
+        .write_image_data(rgb)
         .map_err(|e| anyhow!("cannot write the PNG image: {e}"))?;
     writer
         .finish()

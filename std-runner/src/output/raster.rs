@@ -4,6 +4,7 @@
 
 use super::camera::{MAX_SIDE, OptionError, Projection, Size};
 use super::frame::Frame;
+use super::interp::corner_weights;
 use crate::scene::Camera;
 use anyhow::anyhow;
 use glam::{DVec3, Vec3};
@@ -14,6 +15,9 @@ pub const MAX_SAMPLES: u64 = 1 << 26;
 
 /// Most samples per pixel along each axis.
 pub const MAX_SUPERSAMPLE: u32 = 8;
+
+/// No patch covers the sample (see [`Rasterizer::track_owners`]).
+const NO_OWNER: u32 = u32::MAX;
 
 /// Points nearer the eye than this fraction of the eye-target distance are clipped.
 pub const NEAR_REL: f64 = 1e-6;
@@ -37,6 +41,10 @@ pub struct Rasterizer {
     colour: Vec<f32>,
     /// Whether the patch being drawn shows the back of a one-sided polygon.
     drawing_back: bool,
+    /// Per sample: the index of the patch it shows; empty unless tracked.
+    owner: Vec<u32>,
+    /// Patches drawn so far.
+    drawn: u32,
 }
 
 /// What the samples of an image show, in fractions of them.
@@ -97,6 +105,8 @@ impl Rasterizer {
             clipped: Vec::new(),
             colour: vec![0.0; bands],
             drawing_back: false,
+            owner: Vec::new(),
+            drawn: 0,
         })
     }
 
@@ -137,6 +147,7 @@ impl Rasterizer {
         }
         self.clip(corners);
         if self.clipped.len() < 3 {
+            self.drawn = self.drawn.wrapping_add(1);
             return Ok(());
         }
         // Image coordinates and 1/z, which is affine in image space for a planar polygon.
@@ -151,6 +162,7 @@ impl Rasterizer {
         for k in 1..verts.len() - 1 {
             self.triangle([verts[0], verts[k], verts[k + 1]]);
         }
+        self.drawn = self.drawn.wrapping_add(1);
         Ok(())
     }
 
@@ -178,46 +190,126 @@ impl Rasterizer {
     /// Fills the samples whose centres lie in (or on the edge of) a triangle of image-space
     /// vertices `[x, y, 1/z]`, where it is nearer than what is there.
     fn triangle(&mut self, v: [[f64; 3]; 3]) {
-        let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| {
-            (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
-        };
-        let area = edge(v[0], v[1], v[2][0], v[2][1]);
-        if !(area.is_finite() && area != 0.0) {
-            return;
-        }
-        let (w, h) = (
-            f64::from(self.size.width * self.supersample),
-            f64::from(self.size.height * self.supersample),
-        );
-        let lo = |k: usize| v.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
-        let hi = |k: usize| v.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
-        let x0 = (lo(0) - 0.5).ceil().max(0.0);
-        let x1 = (hi(0) - 0.5).floor().min(w - 1.0);
-        let y0 = (lo(1) - 0.5).ceil().max(0.0);
-        let y1 = (hi(1) - 0.5).floor().min(h - 1.0);
-        if !(x0 <= x1 && y0 <= y1) {
-            return;
-        }
-        let stride = w as usize;
+        let fine = self.fine();
         let bands = self.bands;
-        for y in y0 as usize..=y1 as usize {
-            let py = y as f64 + 0.5;
-            for x in x0 as usize..=x1 as usize {
-                let px = x as f64 + 0.5;
-                let l0 = edge(v[1], v[2], px, py) / area;
-                let l1 = edge(v[2], v[0], px, py) / area;
-                let l2 = edge(v[0], v[1], px, py) / area;
-                if l0 < 0.0 || l1 < 0.0 || l2 < 0.0 {
-                    continue;
-                }
-                let inv_z = (l0 * v[0][2] + l1 * v[1][2] + l2 * v[2][2]) as f32;
-                let at = y * stride + x;
-                if inv_z > self.inv_depth[at] {
-                    self.inv_depth[at] = inv_z;
-                    self.radiance[at * bands..(at + 1) * bands].copy_from_slice(&self.colour);
-                    self.back[at] = self.drawing_back;
+        let index = self.drawn;
+        let track = !self.owner.is_empty();
+        let Rasterizer {
+            inv_depth,
+            radiance,
+            back,
+            owner,
+            colour,
+            drawing_back,
+            ..
+        } = self;
+        covered(fine, v, |at, l| {
+            let inv_z = (l[0] * v[0][2] + l[1] * v[1][2] + l[2] * v[2][2]) as f32;
+            if inv_z > inv_depth[at] {
+                inv_depth[at] = inv_z;
+                radiance[at * bands..(at + 1) * bands].copy_from_slice(colour);
+                back[at] = *drawing_back;
+                if track {
+                    owner[at] = index;
                 }
             }
+        });
+    }
+
+    /// Samples per side of the framebuffer.
+    fn fine(&self) -> [usize; 2] {
+        [
+            (self.size.width * self.supersample) as usize,
+            (self.size.height * self.supersample) as usize,
+        ]
+    }
+
+    /// Remembers from now on which patch each sample shows, so that [`Rasterizer::shade`]
+    /// can colour the samples of a patch again.
+    pub fn track_owners(&mut self) {
+        self.owner = vec![NO_OWNER; self.inv_depth.len()];
+    }
+
+    /// Forgets which patch each sample shows (and the memory it took).
+    pub fn stop_tracking(&mut self) {
+        self.owner = Vec::new();
+    }
+
+    /// Patches drawn so far (the next patch's index for [`Rasterizer::shade`]).
+    pub fn drawn(&self) -> u32 {
+        self.drawn
+    }
+
+    /// Colours again the samples that show patch `index` (the `index`-th drawn since
+    /// [`Rasterizer::track_owners`]), the same `corners` and `normal`, from radiosity at its
+    /// corners: `values[side]` holds `bands` values (W/m^2) per corner, corner after corner
+    /// (empty: the side keeps its flat colour). Values are interpolated across the patch
+    /// in world space (barycentric for triangles, bilinear for quads, see
+    /// [`super::interp`]).
+    pub fn shade(&mut self, index: u32, corners: &[Vec3], normal: Vec3, values: [&[f32]; 2]) {
+        let n = corners.len();
+        if self.owner.is_empty() || !(3..=4).contains(&n) {
+            return;
+        }
+        let towards_eye = self.projection.eye() - corners[0].as_dvec3();
+        let side = usize::from(towards_eye.dot(normal.as_dvec3()) < 0.0);
+        let values = values[side];
+        if values.len() < n * self.bands {
+            return;
+        }
+        // Corners in 2D coordinates of the patch's plane, in camera space (m).
+        let cam: Vec<DVec3> = corners
+            .iter()
+            .map(|c| self.projection.to_camera(c.as_dvec3()))
+            .collect();
+        let axis_u = (cam[1] - cam[0]).normalize_or_zero();
+        let n_cam = (cam[1] - cam[0]).cross(cam[n - 1] - cam[0]);
+        let axis_v = n_cam.cross(axis_u).normalize_or_zero();
+        let plane = |p: DVec3| [(p - cam[0]).dot(axis_u), (p - cam[0]).dot(axis_v)];
+        let flat: Vec<[f64; 2]> = cam.iter().map(|&c| plane(c)).collect();
+        self.clip(corners);
+        if self.clipped.len() < 3 {
+            return;
+        }
+        let clipped = self.clipped.clone();
+        let verts: Vec<[f64; 3]> = clipped
+            .iter()
+            .map(|&c| {
+                let [x, y] = self.projection.to_image(c);
+                [x, y, 1.0 / c.z]
+            })
+            .collect();
+        let fine = self.fine();
+        let bands = self.bands;
+        let mut weights = [0.0f64; 4];
+        let Rasterizer {
+            radiance, owner, ..
+        } = self;
+        for k in 1..verts.len() - 1 {
+            let tri = [0, k, k + 1];
+            let v = tri.map(|i| verts[i]);
+            covered(fine, v, |at, l| {
+                if owner[at] != index {
+                    return;
+                }
+                // Perspective-correct point: camera-space position is affine in l / z.
+                let lw = [l[0] * v[0][2], l[1] * v[1][2], l[2] * v[2][2]];
+                let sum = lw[0] + lw[1] + lw[2];
+                if sum.is_nan() || sum <= 0.0 {
+                    return;
+                }
+                let p =
+                    (clipped[tri[0]] * lw[0] + clipped[tri[1]] * lw[1] + clipped[tri[2]] * lw[2])
+                        / sum;
+                corner_weights(&flat, plane(p), &mut weights);
+                let out = &mut radiance[at * bands..(at + 1) * bands];
+                for (b, o) in out.iter_mut().enumerate() {
+                    let b_sum: f64 = (0..n)
+                        .map(|c| weights[c] * f64::from(values[c * bands + b]))
+                        .sum();
+                    *o = (b_sum / std::f64::consts::PI) as f32;
+                }
+            });
         }
     }
 
@@ -279,6 +371,43 @@ impl Rasterizer {
             lit: lit as f64 / n,
             backs: backs as f64 / n,
             empty: empty as f64 / n,
+        }
+    }
+}
+
+/// Calls `f(sample index, screen barycentrics)` for every sample of a `fine` = `[width,
+/// height]` framebuffer whose centre lies in (or on the edge of) the triangle of image-space
+/// vertices `[x, y, 1/z]`.
+fn covered(fine: [usize; 2], v: [[f64; 3]; 3], mut f: impl FnMut(usize, [f64; 3])) {
+    let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| {
+        (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
+    };
+    let area = edge(v[0], v[1], v[2][0], v[2][1]);
+    if !(area.is_finite() && area != 0.0) {
+        return;
+    }
+    let (w, h) = (fine[0] as f64, fine[1] as f64);
+    let lo = |k: usize| v.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+    let hi = |k: usize| v.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+    let x0 = (lo(0) - 0.5).ceil().max(0.0);
+    let x1 = (hi(0) - 0.5).floor().min(w - 1.0);
+    let y0 = (lo(1) - 0.5).ceil().max(0.0);
+    let y1 = (hi(1) - 0.5).floor().min(h - 1.0);
+    if !(x0 <= x1 && y0 <= y1) {
+        return;
+    }
+    let stride = fine[0];
+    for y in y0 as usize..=y1 as usize {
+        let py = y as f64 + 0.5;
+        for x in x0 as usize..=x1 as usize {
+            let px = x as f64 + 0.5;
+            let l0 = edge(v[1], v[2], px, py) / area;
+            let l1 = edge(v[2], v[0], px, py) / area;
+            let l2 = edge(v[0], v[1], px, py) / area;
+            if l0 < 0.0 || l1 < 0.0 || l2 < 0.0 {
+                continue;
+            }
+            f(y * stride + x, [l0, l1, l2]);
         }
     }
 }

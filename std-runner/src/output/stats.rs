@@ -88,6 +88,12 @@ pub struct ImageSettings {
     pub supersample: u32,
     /// `--display-bands` as given (`null`: the default for the scene's bands).
     pub display_bands: Option<String>,
+    /// `--display` as given (`map` or `bands`; `null`: the default for the scene's bands).
+    #[serde(default)]
+    pub display: Option<String>,
+    /// `--shading`: `smooth` or `flat`.
+    #[serde(default)]
+    pub shading: String,
 }
 
 /// A file the run wrote.

@@ -68,6 +68,7 @@ fn feed(sink: &mut impl Sink<Error = anyhow::Error>, patches: &[Patch]) {
             id: id as u64,
             corners: &p.corners,
             normal: p.normal,
+            material: 0,
             radiosity: [&p.front, &p.back],
         })
         .unwrap();
@@ -209,6 +210,7 @@ fn bad_patches_and_settings_are_refused() {
             id: 9,
             corners: &corners,
             normal,
+            material: 0,
             radiosity: [front, back],
         });
         assert!(e.unwrap_err().to_string().contains("polygon 9"));

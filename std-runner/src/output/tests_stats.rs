@@ -29,6 +29,8 @@ fn report() -> SolveReport {
                 camera: "0,0,5,0,0,0,0,1,0,40".into(),
                 supersample: 2,
                 display_bands: Some("par".into()),
+                display: None,
+                shading: "smooth".into(),
             }),
         }),
         outputs: vec![OutputFile {
