@@ -10,9 +10,11 @@
 //!   repository's fixtures. In a `console` block only the lines after a `$ ` prompt are
 //!   commands. `#` starts a comment, `\` at the end of a line continues it, `&&` and `;`
 //!   separate commands, `NAME=VALUE` before a command sets its environment.
-//! * `<!-- slow: REASON -->` on the line before a fence marks its commands as slow (over about
-//!   20 s in this test's build): they are listed as skipped with the reason, and run only
-//!   when `HIRAD_DOCS_SLOW=1`.
+//! * Comments on the lines just before a fence mark its commands. `<!-- slow: REASON -->`:
+//!   slow (over about 20 s in this test's build): they are listed as skipped with the reason,
+//!   and run only when `HIRAD_DOCS_SLOW=1`. `<!-- warns: TEXT -->` (repeatable): the docs say
+//!   the commands print a warning containing TEXT, as `hirad flatten` does for what OBJ cannot
+//!   hold; each such warning must appear.
 //!
 //! Which commands run ([`classify`]): `hirad ARGS` and `cargo run [...] -p hirad -- ARGS` run
 //! the `hirad` this test was built with. Skipped by rule, and listed: any other `cargo`
@@ -22,7 +24,7 @@
 //! a failure, so that a new kind of example cannot go unchecked.
 //!
 //! A command fails the test when it exits non-zero, when its stderr has a line containing
-//! `warning`, and, for `hirad solve`, when nothing is lit: the irradiance columns (`irr...`)
+//! `warning` (other than those its `warns` marks name), and, for `hirad solve`, when nothing is lit: the irradiance columns (`irr...`)
 //! of its results table are zero on every polygon. A solve without `--results` is given one
 //! in a side file for this check.
 
@@ -39,8 +41,10 @@ struct Block {
     lang: String,
     /// `title=NAME` of the info string.
     title: Option<String>,
-    /// Reason of a `<!-- slow: REASON -->` comment on the line before the fence.
+    /// Reason of a `<!-- slow: REASON -->` comment on the lines just before the fence.
     slow: Option<String>,
+    /// Texts of `<!-- warns: TEXT -->` comments on the lines just before the fence.
+    warns: Vec<String>,
     /// The block's lines, without the fences.
     text: String,
 }
@@ -49,23 +53,27 @@ struct Block {
 fn blocks(markdown: &str) -> Result<Vec<Block>, String> {
     let mut out = Vec::new();
     let mut lines = markdown.lines().enumerate();
-    let mut previous = "";
+    // The `<!-- KEY: VALUE -->` comments on the lines just before the current one.
+    let mut comments: Vec<(String, String)> = Vec::new();
     while let Some((i, line)) = lines.next() {
         let trimmed = line.trim_start();
-        let fence_char = match trimmed.chars().next() {
-            Some(c @ ('`' | '~')) => c,
-            _ => {
-                if !line.trim().is_empty() {
-                    previous = line;
-                }
-                continue;
+        let fence_char = trimmed.chars().next().filter(|c| matches!(c, '`' | '~'));
+        let fence_len = fence_char.map_or(0, |f| trimmed.chars().take_while(|&c| c == f).count());
+        let (Some(fence_char), true) = (
+            fence_char,
+            fence_len >= 3 && line.len() - trimmed.len() <= 3,
+        ) else {
+            match trimmed
+                .trim_end()
+                .strip_prefix("<!--")
+                .and_then(|r| r.strip_suffix("-->"))
+                .and_then(|r| r.split_once(':'))
+            {
+                Some((k, v)) => comments.push((k.trim().to_string(), v.trim().to_string())),
+                None => comments.clear(),
             }
-        };
-        let fence_len = trimmed.chars().take_while(|&c| c == fence_char).count();
-        if fence_len < 3 || line.len() - trimmed.len() > 3 {
-            previous = line;
             continue;
-        }
+        };
         let info = trimmed[fence_len..].trim();
         let mut words = info.split_whitespace();
         let lang = words.next().unwrap_or("").to_string();
@@ -73,11 +81,16 @@ fn blocks(markdown: &str) -> Result<Vec<Block>, String> {
             .filter_map(|w| w.strip_prefix("title="))
             .map(str::to_string)
             .next();
-        let slow = previous
-            .trim()
-            .strip_prefix("<!-- slow:")
-            .and_then(|r| r.strip_suffix("-->"))
-            .map(|r| r.trim().to_string());
+        let marks = |key: &str| -> Vec<String> {
+            comments
+                .iter()
+                .filter(|(k, _)| k == key)
+                .map(|(_, v)| v.clone())
+                .collect()
+        };
+        let slow = marks("slow").into_iter().next();
+        let warns = marks("warns");
+        comments.clear();
         let mut text = String::new();
         let mut closed = false;
         for (_, l) in lines.by_ref() {
@@ -97,9 +110,9 @@ fn blocks(markdown: &str) -> Result<Vec<Block>, String> {
             lang,
             title,
             slow,
+            warns,
             text,
         });
-        previous = "";
     }
     Ok(out)
 }
@@ -260,7 +273,9 @@ fn classify(words: &[String]) -> Result<Run, String> {
             let hirad = opts
                 .windows(2)
                 .any(|w| (w[0] == "-p" || w[0] == "--package") && w[1] == "hirad")
-                || opts.iter().any(|w| w == "--package=hirad" || w == "--bin=hirad")
+                || opts
+                    .iter()
+                    .any(|w| w == "--package=hirad" || w == "--bin=hirad")
                 || opts.windows(2).any(|w| w[0] == "--bin" && w[1] == "hirad");
             if opts.iter().any(|w| w.starts_with("--example")) {
                 return Ok(Run::Skip(
@@ -271,7 +286,9 @@ fn classify(words: &[String]) -> Result<Run, String> {
                 let args = dash.map(|d| words[d + 1..].to_vec()).unwrap_or_default();
                 return Ok(Run::Hirad(args));
             }
-            return Err(format!("cargo run of something other than hirad: {words:?}"));
+            return Err(format!(
+                "cargo run of something other than hirad: {words:?}"
+            ));
         }
         return Ok(Run::Skip(
             "a cargo command that builds or tests the workspace this test is part of",
@@ -291,7 +308,11 @@ fn classify(words: &[String]) -> Result<Run, String> {
 /// starting with `irr`, whatever the band names) is zero. An error when it has none.
 fn dark(csv: &str) -> Result<bool, String> {
     let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().ok_or("empty results table")?.split(',').collect();
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or("empty results table")?
+        .split(',')
+        .collect();
     let irr: Vec<usize> = (0..header.len())
         .filter(|&i| header[i].trim().starts_with("irr"))
         .collect();
@@ -332,8 +353,14 @@ fn markdown_files() -> Vec<PathBuf> {
     files
 }
 
-/// Runs `hirad args` in `dir` and checks it; `Err` says what is wrong.
-fn check_hirad(dir: &Path, env: &[(String, String)], args: &[String]) -> Result<(), String> {
+/// Runs `hirad args` in `dir` and checks it; `Err` says what is wrong. `warns`: texts of the
+/// warnings the docs say it prints (each must appear; no other warning may).
+fn check_hirad(
+    dir: &Path,
+    env: &[(String, String)],
+    args: &[String],
+    warns: &[String],
+) -> Result<(), String> {
     let mut args = args.to_vec();
     let solve = args.first().is_some_and(|a| a == "solve");
     let results = if solve {
@@ -362,8 +389,21 @@ fn check_hirad(dir: &Path, env: &[(String, String)], args: &[String]) -> Result<
         .lines()
         .filter(|l| l.to_lowercase().contains("warning"))
         .collect();
-    if !warnings.is_empty() {
-        return Err(format!("warnings:\n{}", warnings.join("\n")));
+    let unexpected: Vec<&str> = warnings
+        .iter()
+        .copied()
+        .filter(|l| !warns.iter().any(|w| l.contains(w.as_str())))
+        .collect();
+    if !unexpected.is_empty() {
+        return Err(format!("warnings:\n{}", unexpected.join("\n")));
+    }
+    if let Some(w) = warns
+        .iter()
+        .find(|w| !warnings.iter().any(|l| l.contains(w.as_str())))
+    {
+        return Err(format!(
+            "no warning containing {w:?} as the docs say; stderr:\n{stderr}"
+        ));
     }
     if let Some(results) = results {
         let csv = std::fs::read_to_string(&results)
@@ -431,7 +471,7 @@ fn run_file(md: &Path, slow: bool) -> (Vec<String>, Vec<String>) {
                 continue;
             }
             let start = Instant::now();
-            let result = check_hirad(dir.path(), &env, &args);
+            let result = check_hirad(dir.path(), &env, &args, &b.warns);
             eprintln!(
                 "{name}:{}: {:.1} s `{shown}`",
                 b.line,
@@ -475,10 +515,12 @@ fn blocks_titles_slow_marks_and_commands() {
               hirad 1\n\
               ```\n\
               <!-- slow: the stand, minutes -->\n\
+              <!-- warns: lost -->\n\
               ```sh\n\
               hirad gen stand \\\n  -o s.hirb && hirad info s.hirb  # comment\n\
               X=1 cargo run --release -p hirad -- solve 'my scene.hir'\n\
               ```\n\
+              <!-- slow: not this one: text comes between -->\n\
               text\n\
               ~~~~console\n\
               $ hirad info a.hir\n\
@@ -495,6 +537,8 @@ fn blocks_titles_slow_marks_and_commands() {
     assert_eq!(b[0].text, "hirad 1\n");
     assert_eq!(b[0].slow, None);
     assert_eq!(b[1].slow.as_deref(), Some("the stand, minutes"));
+    assert_eq!(b[1].warns, vec!["lost".to_string()]);
+    assert!(b[2].warns.is_empty());
     assert_eq!(b[1].title, None);
     assert_eq!(b[2].slow, None);
     // A ``` inside a ~~~~ block does not close it.
@@ -540,7 +584,10 @@ fn commands_map_to_the_binary_or_a_rule() {
         Run::Hirad(w("info x.hir"))
     );
     assert_eq!(
-        classify(&w("cargo run --release -p hirad -- solve x.hir --image x.png")).unwrap(),
+        classify(&w(
+            "cargo run --release -p hirad -- solve x.hir --image x.png"
+        ))
+        .unwrap(),
         Run::Hirad(w("solve x.hir --image x.png"))
     );
     assert!(matches!(
@@ -564,7 +611,10 @@ fn dark_reads_irradiance_columns_by_prefix() {
     assert!(dark("id,area,rad_0,irr_0\n0,1,100,0\n1,1,0,0\n").unwrap());
     assert!(!dark("id,area,rad_0,irr_0\n0,1,100,0\n1,1,0,2.5\n").unwrap());
     assert!(!dark("id,area,rad_par,rad_nir,irr_par,irr_nir\n0,1,0,0,0,1e-3\n").unwrap());
-    assert!(dark("id,area,rad_0\n0,1,1\n").is_err(), "no irradiance column");
+    assert!(
+        dark("id,area,rad_0\n0,1,1\n").is_err(),
+        "no irradiance column"
+    );
 }
 
 /// The check catches a lamp that faces away from what it should light (the first example
@@ -581,7 +631,7 @@ fn a_lamp_facing_away_is_dark() {
     let args = |f: &str| vec!["solve".to_string(), f.to_string()];
     std::fs::write(dir.path().join("up.hir"), scene("0 0 2  1 0 2  0 1 2")).unwrap();
     std::fs::write(dir.path().join("down.hir"), scene("0 0 2  0 1 2  1 0 2")).unwrap();
-    let e = check_hirad(dir.path(), &[], &args("up.hir")).unwrap_err();
+    let e = check_hirad(dir.path(), &[], &args("up.hir"), &[]).unwrap_err();
     assert!(e.contains("nothing is lit"), "{e}");
-    check_hirad(dir.path(), &[], &args("down.hir")).unwrap();
+    check_hirad(dir.path(), &[], &args("down.hir"), &[]).unwrap();
 }
