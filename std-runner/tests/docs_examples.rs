@@ -4,7 +4,9 @@
 //!
 //! * A fenced block whose info string carries `title=NAME` (```` ```hir title=first.hir ````)
 //!   is a file: it is written to `NAME` in the working folder of that Markdown file before its
-//!   commands run. Other blocks without a command language (grammar, output shown) are text.
+//!   commands run, and some command of the page must name it. A `hir`, `obj` or `mtl` block
+//!   without a title fails the test (nothing would check it). Other blocks (grammar, output
+//!   shown) are text.
 //! * The command lines of `sh`, `bash` and `console` blocks run, in the order of the file, in
 //!   one temporary folder per Markdown file that also holds a link `fixtures` to the
 //!   repository's fixtures. In a `console` block only the lines after a `$ ` prompt are
@@ -340,6 +342,9 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// Languages of fenced blocks that are files a command reads: each must have a title.
+const SCENE_LANGS: [&str; 3] = ["hir", "obj", "mtl"];
+
 /// The Markdown files with examples: README.md and docs/*.md.
 fn markdown_files() -> Vec<PathBuf> {
     let mut files = vec![repo().join("README.md")];
@@ -383,7 +388,7 @@ fn check_hirad(
         .map_err(|e| format!("cannot run hirad: {e}"))?;
     let stderr = String::from_utf8_lossy(&out.stderr);
     if !out.status.success() {
-        return Err(format!("exit status {}; stderr:\n{stderr}", out.status));
+        return Err(format!("failed ({}); stderr:\n{stderr}", out.status));
     }
     let warnings: Vec<&str> = stderr
         .lines()
@@ -436,6 +441,26 @@ fn run_file(md: &Path, slow: bool) -> (Vec<String>, Vec<String>) {
                 failures.push(format!("{name}:{}: a second file named {title}", b.line));
             }
             std::fs::write(path, &b.text).unwrap();
+        }
+    }
+    // Every scene block is a file that some command of the page uses.
+    let words: Vec<String> = blocks
+        .iter()
+        .filter_map(|b| commands(b).ok().flatten())
+        .flatten()
+        .flat_map(|(_, w)| w)
+        .collect();
+    for b in &blocks {
+        match (&b.title, SCENE_LANGS.contains(&b.lang.as_str())) {
+            (None, true) => failures.push(format!(
+                "{name}:{}: a {} block without title=NAME: nothing runs it",
+                b.line, b.lang
+            )),
+            (Some(t), _) if !words.contains(t) => failures.push(format!(
+                "{name}:{}: no command of the page uses {t}",
+                b.line
+            )),
+            _ => {}
         }
     }
     for b in &blocks {
@@ -634,4 +659,37 @@ fn a_lamp_facing_away_is_dark() {
     let e = check_hirad(dir.path(), &[], &args("up.hir"), &[]).unwrap_err();
     assert!(e.contains("nothing is lit"), "{e}");
     check_hirad(dir.path(), &[], &args("down.hir"), &[]).unwrap();
+}
+
+/// A page's checks on a small page written here: a scene block without a title, a titled file
+/// no command uses, a command that fails, a slow command skipped, a good one passing.
+#[test]
+fn run_file_reports_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let md = dir.path().join("page.md");
+    let scene = "hirad 1\nbands 1\nmaterial w rho 0.5\nmaterial l rho 0 emit 10\n\
+                 scene {\n  quad w 0 0 0  1 0 0  1 1 0  0 1 0\n  tri l 0 0 1  0 1 1  1 0 1\n}\n";
+    std::fs::write(
+        &md,
+        format!(
+            "```hir title=lit.hir\n{scene}```\n\n```hir\n{scene}```\n\n\
+             ```hir title=unused.hir\n{scene}```\n\n\
+             ```sh\nhirad solve lit.hir\nhirad info missing.hir\n```\n\n\
+             <!-- slow: a test of the mark -->\n```sh\nhirad solve lit.hir --size 9x9\n```\n"
+        ),
+    )
+    .unwrap();
+    let (failures, skipped) = run_file(&md, false);
+    assert_eq!(failures.len(), 3, "{failures:#?}");
+    assert!(
+        failures[0].contains(":12: a hir block without title"),
+        "{failures:#?}"
+    );
+    assert!(failures[1].contains(":23: no command of the page uses unused.hir"));
+    assert!(failures[2].contains("`hirad info missing.hir`: failed (exit status: 1)"));
+    assert_eq!(skipped.len(), 1, "{skipped:#?}");
+    assert!(
+        skipped[0].contains("slow (a test of the mark)"),
+        "{skipped:#?}"
+    );
 }
