@@ -13,7 +13,7 @@
 //!   commands. `#` starts a comment, `\` at the end of a line continues it, `&&` and `;`
 //!   separate commands, `NAME=VALUE` before a command sets its environment.
 //! * Comments on the lines just before a fence mark its commands. `<!-- slow: REASON -->`:
-//!   slow (over about 20 s in this test's build): they are listed as skipped with the reason,
+//!   slow (over about 20 s): they are listed as skipped with the reason,
 //!   and run only when `HIRAD_DOCS_SLOW=1`. `<!-- warns: TEXT -->` (repeatable): the docs say
 //!   the commands print a warning containing TEXT, as `hirad flatten` does for what OBJ cannot
 //!   hold; each such warning must appear.
@@ -26,9 +26,15 @@
 //! a failure, so that a new kind of example cannot go unchecked.
 //!
 //! A command fails the test when it exits non-zero, when its stderr has a line containing
-//! `warning` (other than those its `warns` marks name), and, for `hirad solve`, when nothing is lit: the irradiance columns (`irr...`)
-//! of its results table are zero on every polygon. A solve without `--results` is given one
-//! in a side file for this check.
+//! `warning` (other than those its `warns` marks name), and, for `hirad solve`, when nothing
+//! is lit: the irradiance columns (`irr...`, whatever the bands are called) of its results
+//! table are zero on every polygon. A solve without `--results` is given one in a side file
+//! for this check.
+//!
+//! The test belongs to the `hirad` package, not to the root's `tests/`, because only the
+//! package that owns the `hirad` binary gets `CARGO_BIN_EXE_hirad`. The test profile builds
+//! hirad at opt-level 3, so the times it prints are close to a release build's.
+//! `cargo test -p hirad --test docs_examples -- --nocapture` shows them and the skipped list.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
