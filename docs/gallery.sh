@@ -102,6 +102,41 @@ cores=$(nproc)
 load_before=$(cut -d' ' -f1-3 /proc/loadavg)
 started=$(date -u '+%Y-%m-%d %H:%M UTC')
 
+if [ $quick = 1 ]; then
+    times=$work/gallery-times.md
+    mode="\`docs/gallery.sh --quick\` (the quick commands only)"
+else
+    times=$repo/docs/gallery-times.md
+    mode="\`docs/gallery.sh\`"
+fi
+
+# Writes the table of the commands run so far; $1 says whether the run is complete. Written
+# after every command, so that a run stopped halfway leaves what it measured, marked as such.
+write_times() {
+    local state=$1 load_now
+    load_now=$(cut -d' ' -f1-3 /proc/loadavg)
+    {
+        echo "# Gallery times"
+        echo
+        echo "Written by $mode, started $started: hirad at commit $commit, release build;"
+        echo "$cores cores (\`nproc\`), load average $load_before before the run and $load_now at its"
+        echo "last line (1, 5 and 15 minutes). Wall time of each command of [gallery.md](gallery.md),"
+        echo "measured by the script; the load column is the 1-minute load average when the command"
+        echo "started (other work on the machine slows it)."
+        echo
+        if [ "$state" != complete ]; then
+            echo "**Incomplete**: $state."
+            echo
+        fi
+        echo "| command | wall time (s) | load |"
+        echo "| --- | ---: | ---: |"
+        if [ ${#rows[@]} -gt 0 ]; then
+            printf '%s\n' "${rows[@]}"
+        fi
+    } >"$times.tmp"
+    mv "$times.tmp" "$times"
+}
+
 rows=()
 pictures=()
 n=0
@@ -124,9 +159,11 @@ while IFS=$'\t' read -r kind cmd; do
     load=$(cut -d' ' -f1 /proc/loadavg)
     echo "running: $cmd" >&2
     start=$(date +%s.%N)
+    write_times "the run is at \`$cmd\` (command $n) or was stopped there"
     if ! (cd "$work" && "$bin" "${words[@]:1}") >"$log" 2>&1; then
         echo "failed: $cmd (log $log):" >&2
         tail -n 20 "$log" >&2
+        write_times "\`$cmd\` failed"
         exit 1
     fi
     end=$(date +%s.%N)
@@ -141,27 +178,7 @@ while IFS=$'\t' read -r kind cmd; do
     done
 done <<<"$commands"
 
-load_after=$(cut -d' ' -f1-3 /proc/loadavg)
-if [ $quick = 1 ]; then
-    times=$work/gallery-times.md
-    mode="\`docs/gallery.sh --quick\` (the quick commands only)"
-else
-    times=$repo/docs/gallery-times.md
-    mode="\`docs/gallery.sh\`"
-fi
-{
-    echo "# Gallery times"
-    echo
-    echo "Written by $mode, started $started: hirad at commit $commit, release build;"
-    echo "$cores cores (\`nproc\`), load average $load_before before the run and $load_after after"
-    echo "(1, 5 and 15 minutes). Wall time of each command of [gallery.md](gallery.md), measured by"
-    echo "the script; the load column is the 1-minute load average when the command started (other"
-    echo "work on the machine slows it)."
-    echo
-    echo "| command | wall time (s) | load |"
-    echo "| --- | ---: | ---: |"
-    printf '%s\n' "${rows[@]}"
-} >"$times"
+write_times complete
 
 for p in "${pictures[@]}"; do
     if [ ! -s "$work/$p" ]; then
