@@ -547,10 +547,13 @@ fn soup() -> Vec<&'static str> {
 #[test]
 fn the_example_in_the_specification_is_valid() {
     let spec = std::fs::read_to_string(fixture("../docs/format.md")).unwrap();
+    // ```hir blocks, with or without an info string after the language (`title=first.hir`).
     let examples: Vec<&str> = spec
-        .split("```hir\n")
+        .split("```hir")
         .skip(1)
-        .filter_map(|s| s.split("\n```").next())
+        .filter_map(|s| s.split_once('\n'))
+        .filter(|(info, _)| info.is_empty() || info.starts_with(' '))
+        .filter_map(|(_, s)| s.split("\n```").next())
         .collect();
     assert_eq!(examples.len(), 2, "the first look and the complete example");
     for text in &examples {

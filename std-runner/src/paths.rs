@@ -76,15 +76,13 @@ fn check(inputs: &[PathBuf], outputs: &[Output<'_>]) -> Result<()> {
             }
         }
         let key = identity(path, &dir);
-        if !written_into {
-            if let Some((_, first)) = seen.iter().find(|(k, _)| *k == key) {
-                bail!(
-                    "{option} {} and {} {} name the same file: one would replace the other",
-                    path.display(),
-                    first.option,
-                    first.path.display()
-                );
-            }
+        if !written_into && let Some((_, first)) = seen.iter().find(|(k, _)| *k == key) {
+            bail!(
+                "{option} {} and {} {} name the same file: one would replace the other",
+                path.display(),
+                first.option,
+                first.path.display()
+            );
         }
         seen.push((key, *out));
     }

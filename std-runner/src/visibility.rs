@@ -582,15 +582,16 @@ impl Visibility for ObvhsVisibility {
 
     /// Along a direction with a grid, the polygons of the origin's cell only; else the BVH.
     fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
-        if let Some(g) = self.directional.iter().find(|g| g.runs_along(towards)) {
-            if from.is_finite() && to.is_finite() {
-                let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
-                let hit = g.any(o, d, |id| {
-                    id != skip[0] && id != skip[1] && self.blocks(id as usize, o, d)
-                });
-                if let Some(blocked) = hit {
-                    return if blocked { 0.0 } else { 1.0 };
-                }
+        if let Some(g) = self.directional.iter().find(|g| g.runs_along(towards))
+            && from.is_finite()
+            && to.is_finite()
+        {
+            let (o, d) = (from.as_dvec3(), (to - from).as_dvec3());
+            let hit = g.any(o, d, |id| {
+                id != skip[0] && id != skip[1] && self.blocks(id as usize, o, d)
+            });
+            if let Some(blocked) = hit {
+                return if blocked { 0.0 } else { 1.0 };
             }
         }
         self.transmittance(from, to, skip)
@@ -666,10 +667,10 @@ impl ObvhsVisibility {
             if id as u32 == skip[0] || id as u32 == skip[1] {
                 continue;
             }
-            if let Some(t) = self.crossing_of(id, o, d) {
-                if best.is_none_or(|(_, bt)| t < bt) {
-                    best = Some((id as u32, t));
-                }
+            if let Some(t) = self.crossing_of(id, o, d)
+                && best.is_none_or(|(_, bt)| t < bt)
+            {
+                best = Some((id as u32, t));
             }
         }
         best.map(|(id, t)| (id, t as f32))

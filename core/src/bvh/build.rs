@@ -649,7 +649,7 @@ mod tests {
                     unit(hash3(i, k, 2)),
                     unit(hash3(i, k, 3)),
                 );
-                if k > 600 && k % 7 == 0 {
+                if k > 600 && k.is_multiple_of(7) {
                     Aabb::new(Vec3::splat(f32::NAN), Vec3::splat(f32::NAN))
                 } else {
                     Aabb::new(c, c + 0.01)

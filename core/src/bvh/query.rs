@@ -203,11 +203,11 @@ impl Bvh<'_> {
             if node.is_leaf() {
                 let ids = &self.order[node.first as usize..(node.first + node.count) as usize];
                 for &id in ids {
-                    if let Some(t) = hit(id, t_max) {
-                        if t < t_max {
-                            t_max = t;
-                            best = Some((id, t));
-                        }
+                    if let Some(t) = hit(id, t_max)
+                        && t < t_max
+                    {
+                        t_max = t;
+                        best = Some((id, t));
                     }
                 }
             } else {

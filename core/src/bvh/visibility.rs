@@ -140,7 +140,11 @@ mod tests {
         let n = (rnd3(i, seed ^ 0x51) - 0.5).normalize_or(Vec3::Z);
         let u = n.any_orthonormal_vector() * size * (0.5 + unit(hash3(i, seed, 7)));
         let v = n.cross(n.any_orthonormal_vector()) * size * (0.5 + unit(hash3(i, seed, 8)));
-        let k = if hash3(i, seed, 9) % 2 == 0 { 3 } else { 4 };
+        let k = if hash3(i, seed, 9).is_multiple_of(2) {
+            3
+        } else {
+            4
+        };
         let mut c = [Vec3::ZERO; 4];
         let step = core::f32::consts::TAU / k as f32;
         for (j, p) in c.iter_mut().enumerate().take(k) {
@@ -183,10 +187,11 @@ mod tests {
                 if skip.contains(&(i as u32)) {
                     continue;
                 }
-                if let Some(t) = segment_polygon(from, to - from, self.poly(i)) {
-                    if t > SEGMENT_MARGIN && t < 1.0 - SEGMENT_MARGIN {
-                        return 0.0;
-                    }
+                if let Some(t) = segment_polygon(from, to - from, self.poly(i))
+                    && t > SEGMENT_MARGIN
+                    && t < 1.0 - SEGMENT_MARGIN
+                {
+                    return 0.0;
                 }
             }
             1.0

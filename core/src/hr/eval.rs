@@ -187,11 +187,11 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
             area: r_area,
             ..
         } => {
-            if let Shape::Patch { area: e_area, .. } = e {
-                if e_area < r_area {
-                    reciprocal(st, ws, recv, &r, emit, &e, seed, rays, vis, &mut out);
-                    return out;
-                }
+            if let Shape::Patch { area: e_area, .. } = e
+                && e_area < r_area
+            {
+                reciprocal(st, ws, recv, &r, emit, &e, seed, rays, vis, &mut out);
+                return out;
             }
             // Buried points receive nothing, but count for the open coefficient: a patch
             // whose points are all buried may still be partly exposed, and its links must
