@@ -692,7 +692,7 @@ fn run_file_reports_what_is_wrong() {
         "{failures:#?}"
     );
     assert!(failures[1].contains(":23: no command of the page uses unused.hir"));
-    assert!(failures[2].contains("`hirad info missing.hir`: failed (exit status: 1)"));
+    assert!(failures[2].contains("`hirad info missing.hir`: failed (exit status: 3)"));
     assert_eq!(skipped.len(), 1, "{skipped:#?}");
     assert!(
         skipped[0].contains("slow (a test of the mark)"),
