@@ -758,3 +758,72 @@ fn results_join_to_groups_and_materials() {
     let (header, _) = table(&csv);
     assert_eq!(header[2..4], ["rad_0_W_m2", "rad_1_W_m2"]);
 }
+
+/// `--reference-image` prints and records the picture's relative L2 error against another
+/// EXR of the same view: 0 against itself, more than 0 for the flat picture against the
+/// smooth one; refused for a PNG or another size.
+#[test]
+fn a_picture_is_compared_with_a_reference_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = fixture("cornell_box.hir");
+    let (a, b, j) = (d.join("a.exr"), d.join("b.exr"), d.join("s.json"));
+    let size = ["--size", "48x36"];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["solve", "-q", s(&scene)];
+        args.extend_from_slice(&size);
+        args.extend_from_slice(extra);
+        ok(&args)
+    };
+    run(&["--image", s(&a)]);
+    let out = run(&[
+        "--image",
+        s(&b),
+        "--reference-image",
+        s(&a),
+        "--stats",
+        s(&j),
+    ]);
+    assert!(out.contains("image error 0.000 %"), "{out}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&j).unwrap()).unwrap();
+    assert_eq!(json["image_error_percent"], 0.0, "{json}");
+    let flat = run(&[
+        "--image",
+        s(&b),
+        "--shading",
+        "flat",
+        "--reference-image",
+        s(&a),
+    ]);
+    let e: f64 = flat
+        .split_whitespace()
+        .nth(2)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{flat}"));
+    assert!(e > 0.0, "{flat}");
+    fails_with(
+        2,
+        &[
+            "solve",
+            s(&scene),
+            "--image",
+            s(&d.join("x.png")),
+            "--reference-image",
+            s(&a),
+        ],
+    );
+    fails_with(
+        3,
+        &[
+            "solve",
+            s(&scene),
+            "--size",
+            "10x10",
+            "--image",
+            s(&b),
+            "--reference-image",
+            s(&a),
+        ],
+    );
+}

@@ -89,6 +89,10 @@ pub struct Args {
     /// error (where the reference is at least 0.1% of its largest).
     #[arg(long)]
     pub reference: Option<PathBuf>,
+    /// Compare the picture (--image, an .exr) with this EXR of the same view and size (e.g.
+    /// from --method exact) and print its relative L2 error in percent.
+    #[arg(long)]
+    pub reference_image: Option<PathBuf>,
     /// Ray caster for hr.
     #[arg(long, value_enum, default_value_t = VisibilityChoice::Obvhs)]
     pub visibility: VisibilityChoice,
@@ -221,6 +225,17 @@ pub fn run(a: Args) -> Result<()> {
     // run reads, no two the same.
     let mut inputs = loaded.inputs.clone();
     inputs.extend(a.reference.iter().cloned());
+    inputs.extend(a.reference_image.iter().cloned());
+    if a.reference_image.is_some()
+        && a.image
+            .as_ref()
+            .and_then(|p| output::ImageFormat::of(p).ok())
+            != Some(output::ImageFormat::Exr)
+    {
+        return refuse(
+            "--reference-image compares linear pictures: give --image OUT.exr".to_string(),
+        );
+    }
     let named: Vec<crate::paths::Output<'_>> = [
         ("--results", &a.results),
         ("--stats", &a.stats),
@@ -521,6 +536,18 @@ pub fn run(a: Args) -> Result<()> {
             c.error_percent, c.reference_max, c.polygons
         ))?;
         super::print_out(&c.worst_lines(&scene.band_names))?;
+    }
+    if let (Some(reference), Some(image)) = (&a.reference_image, &a.image) {
+        let r = output::read_exr(reference)
+            .map_err(|e| input(e.context(format!("{}", reference.display()))))?;
+        let i = output::read_exr(image)?;
+        let e = output::image_compare::image_error_percent(&i, &r)
+            .map_err(|e| input(anyhow!("{}: {e}", reference.display())))?;
+        report.image_error_percent = Some(e);
+        super::print_out(&format!(
+            "image error {e:.3} % (relative L2 against {})\n",
+            reference.display()
+        ))?;
     }
     // The verdict, before the stats that record it: why the numbers are not right, if so.
     let failure = failure(&report, &a);

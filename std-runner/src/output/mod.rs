@@ -14,6 +14,7 @@ pub mod exr_file;
 pub mod font;
 pub mod frame;
 pub mod image;
+pub mod image_compare;
 pub mod interp;
 pub mod outputs;
 pub mod png_file;

@@ -209,6 +209,10 @@ pub struct SolveReport {
     /// stop, when their number is automatic, once a pass moves it by less than 0.5%.
     #[serde(default)]
     pub final_change_percent: Option<f64>,
+    /// Relative L2 error of the picture against `--reference-image`, in percent (see
+    /// `output::image_compare`); `null` without one.
+    #[serde(default)]
+    pub image_error_percent: Option<f64>,
 }
 
 /// Rays cast per phase of a hierarchical solve.

@@ -88,6 +88,7 @@ fn report() -> SolveReport {
         }),
         final_passes: Some(3),
         final_change_percent: Some(0.42),
+        image_error_percent: Some(1.5),
     }
 }
 
@@ -168,6 +169,7 @@ fn json_round_trip_holds_every_field() {
         "rays_by_phase",
         "final_passes",
         "final_change_percent",
+        "image_error_percent",
     ] {
         assert!(
             text.contains(&format!("\"{field}\":")),
