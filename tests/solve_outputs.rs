@@ -134,7 +134,12 @@ fn cornell_box_table_and_image() {
     let camera = scene.cameras[0].clone();
     let mut out = Outputs {
         results: Some(ResultsFile::create(&csv, bands, two_sided(&scene)).unwrap()),
-        image: Some(ImageSink::new(&exr, &camera, size, 1, bands, &scene.band_names).unwrap()),
+        // Flat: every element in its own value (smooth shading blends shared corners).
+        image: Some(
+            ImageSink::new(&exr, &camera, size, 1, bands, &scene.band_names)
+                .unwrap()
+                .with_shading(hirad::output::Shading::Flat),
+        ),
         reference: None,
     };
     let radiances = stream(&scene, &mut out, 1.0);
@@ -149,8 +154,8 @@ fn cornell_box_table_and_image() {
     assert_eq!(table.ids, (0..17).collect::<Vec<u64>>());
     assert!(table.areas.iter().all(|&a| a > 0.0));
 
-    // Every pixel is the background or the radiance of one polygon (one sample per pixel),
-    // and the box fills most of the view.
+    // Flat shading: every pixel is the background or the radiance of one polygon (one
+    // sample per pixel), and the box fills most of the view.
     let image = read_exr(&exr).unwrap();
     assert_eq!((image.width, image.height), (64, 48));
     let order: Vec<usize> = ["R", "G", "B"]

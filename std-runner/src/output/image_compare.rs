@@ -27,7 +27,7 @@ pub fn image_error_percent(image: &Frame, reference: &Frame) -> Result<f64, Stri
         diff += (a - r) * (a - r);
         norm += r * r;
     }
-    if !(norm > 0.0) || !diff.is_finite() {
+    if norm.is_nan() || norm <= 0.0 || !diff.is_finite() {
         return Err("the reference image is black: nothing to compare with".into());
     }
     Ok(100.0 * (diff / norm).sqrt())
