@@ -22,12 +22,12 @@ use std::path::PathBuf;
     long_about = None,
     after_help = "Each command has --help with examples. Documentation: README.md, and in docs/ the\n\
                   scene format (format.md), OBJ import (obj.md) and the solvers (solver.md).\n\n\
-                  Examples:\n  \
-                  hirad solve fixtures/cornell_box.hir --results box.csv --image box.png\n  \
-                  hirad gen poplar --preset paper -o poplar.hirb && hirad info poplar.hirb\n\n\
                   Exit status: 0 success (the numbers are right), 1 the outputs were written but a\n\
                   check failed, 2 usage error, 3 an input file is missing or invalid, 4 the run\n\
-                  could not complete, 130/143 interrupted."
+                  could not complete, 130/143 interrupted.\n\n\
+                  Examples:\n  \
+                  hirad solve fixtures/cornell_box.hir --results box.csv --image box.png\n  \
+                  hirad gen poplar --preset paper -o poplar.hirb && hirad info poplar.hirb"
 )]
 pub struct Cli {
     /// The command to run.
