@@ -6,6 +6,7 @@ mod flatten;
 mod info;
 mod progress;
 mod solve;
+mod verdict;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::path::PathBuf;

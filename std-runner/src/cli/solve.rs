@@ -1,6 +1,7 @@
 //! `hirad solve SCENE`: radiosity of every polygon, with a results table, an image, stats and
 //! the error against a reference.
 
+use super::verdict;
 use crate::exact::{self, ExactSettings};
 use crate::exit::{input, not_right, usage};
 use crate::files;
@@ -455,20 +456,7 @@ pub fn run(a: Args) -> Result<()> {
             report.converged = s.converged;
             report.diverged = s.diverged;
             report.remaining_change = Some(s.remaining_change as f64).filter(|r| r.is_finite());
-            let p = &s.balance;
-            report.power = (0..bands)
-                .map(|b| {
-                    band_power(
-                        &scene.band_names,
-                        b,
-                        p.emitted[b],
-                        p.direct[b],
-                        p.absorbed[b],
-                        p.absorbed_backs[b],
-                        p.escaped[b],
-                    )
-                })
-                .collect();
+            report.power = verdict::powers(&s.balance, bands, &scene.band_names);
         }
         Method::Exact => {
             let settings = ExactSettings {
@@ -506,20 +494,7 @@ pub fn run(a: Args) -> Result<()> {
             report.converged = true;
             report.remaining_change = Some(r.error).filter(|e| e.is_finite());
             report.rays = r.rays;
-            let p = &r.balance;
-            report.power = (0..bands)
-                .map(|b| {
-                    band_power(
-                        &scene.band_names,
-                        b,
-                        p.emitted[b],
-                        p.direct[b],
-                        p.absorbed[b],
-                        p.absorbed_backs[b],
-                        p.escaped[b],
-                    )
-                })
-                .collect();
+            report.power = verdict::powers(&r.balance, bands, &scene.band_names);
         }
     }
     report.seconds = start.elapsed().as_secs_f64();
@@ -550,8 +525,8 @@ pub fn run(a: Args) -> Result<()> {
         ))?;
     }
     // The verdict, before the stats that record it: why the numbers are not right, if so.
-    let failure = failure(&report, &a);
-    let balance_warning = balance_warning(&report, &a);
+    let failure = verdict::failure(&report, a.max_iterations, a.max_imbalance);
+    let balance_warning = verdict::balance_warning(&report, a.max_imbalance);
     warnings.extend(balance_warning.clone());
     report.verdict = Some(output::Verdict {
         passed: failure.is_none(),
@@ -605,110 +580,6 @@ pub fn run(a: Args) -> Result<()> {
         Some(why) => Err(not_right(anyhow!(why))),
         None => Ok(()),
     }
-}
-
-/// One band's line of the power balance.
-fn band_power(
-    names: &[String],
-    b: usize,
-    emitted: f64,
-    direct: f64,
-    absorbed: f64,
-    absorbed_backs: f64,
-    escaped: f64,
-) -> output::BandPower {
-    let input = emitted + direct;
-    let imbalance = input - absorbed - absorbed_backs - escaped;
-    output::BandPower {
-        band: names.get(b).cloned().unwrap_or_else(|| b.to_string()),
-        emitted,
-        direct,
-        absorbed,
-        absorbed_backs,
-        escaped,
-        imbalance,
-        imbalance_percent: if input > 0.0 {
-            100.0 * imbalance / input
-        } else {
-            0.0
-        },
-    }
-}
-
-/// Why the run's numbers are not right (the run then exits 1 after writing its outputs), or
-/// `None`.
-fn failure(report: &SolveReport, a: &Args) -> Option<String> {
-    if report.diverged {
-        return Some(format!(
-            "the solution diverged (a radiosity grew without bound after {} iterations): the outputs were written but mean nothing; this is a solver defect, please report the scene",
-            report.iterations
-        ));
-    }
-    if !report.converged {
-        return Some(format!(
-            "the solution did not converge within {} iterations{}: the outputs were written but are not final (raise --tolerance, or check that the scene absorbs light)",
-            a.max_iterations,
-            report
-                .remaining_change
-                .map(|r| format!(
-                    " (estimated change still to come {r:.1e} of the largest radiosity)"
-                ))
-                .unwrap_or_default()
-        ));
-    }
-    let w = worst_band(report)?;
-    (w.imbalance_percent.abs() > a.max_imbalance).then(|| {
-        format!(
-            "{}; above --max-imbalance {}%, the outputs were written but are not right",
-            balance_line(report, w),
-            a.max_imbalance
-        )
-    })
-}
-
-/// The warning of a power balance off by more than 1% but within `--max-imbalance`.
-fn balance_warning(report: &SolveReport, a: &Args) -> Option<String> {
-    let w = worst_band(report)?;
-    let off = w.imbalance_percent.abs();
-    (off > a.max_imbalance.min(1.0) && off <= a.max_imbalance).then(|| balance_line(report, w))
-}
-
-/// The band whose power balance is worst.
-fn worst_band(report: &SolveReport) -> Option<&output::BandPower> {
-    report.power.iter().max_by(|x, y| {
-        x.imbalance_percent
-            .abs()
-            .total_cmp(&y.imbalance_percent.abs())
-    })
-}
-
-fn balance_line(report: &SolveReport, w: &output::BandPower) -> String {
-    let index = report
-        .power
-        .iter()
-        .position(|p| std::ptr::eq(p, w))
-        .unwrap_or(0);
-    let names: Vec<String> = report.power.iter().map(|p| p.band.clone()).collect();
-    let names = if names.iter().enumerate().all(|(i, n)| *n == i.to_string()) {
-        Vec::new()
-    } else {
-        names
-    };
-    let what = if w.imbalance_percent > 0.0 {
-        "lost"
-    } else {
-        "made"
-    };
-    let cure = if report.method == "exact" {
-        "the form factors disagree with the rays: more --elements brings it down"
-    } else {
-        "cluster links approximate; a smaller --epsilon or more --rays brings it down"
-    };
-    format!(
-        "the power balance is off by {:+.2}% in {}: the transport {what} that much light ({cure})",
-        w.imbalance_percent,
-        output::columns::band_name(index, &names)
-    )
 }
 
 /// The image size without `--size`.

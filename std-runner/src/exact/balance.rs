@@ -19,6 +19,7 @@ use super::quadrature::Quadrature;
 use super::solve::Solution;
 use crate::scene::Scene;
 use glam::Vec3;
+use hirad_core::hr::Balance;
 use hirad_core::limits::{MAX_BANDS, NONE};
 use hirad_core::sampling::{hash3, unit2};
 use hirad_core::visibility::Visibility;
@@ -27,24 +28,8 @@ use rayon::prelude::*;
 /// Rays per emitting element side for the escaped and back-absorbed light (a square).
 pub const RAYS_PER_SIDE: u32 = 256;
 
-/// Where the power went, per band (W).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ExactBalance {
-    /// Emitted by surfaces.
-    pub emitted: [f64; MAX_BANDS],
-    /// Direct light of suns and sky on the receiving sides.
-    pub direct: [f64; MAX_BANDS],
-    /// Absorbed by the receiving sides.
-    pub absorbed: [f64; MAX_BANDS],
-    /// Absorbed by the backs of one-sided polygons.
-    pub absorbed_backs: [f64; MAX_BANDS],
-    /// Leaving the scene.
-    pub escaped: [f64; MAX_BANDS],
-    /// Rays cast.
-    pub rays: u64,
-}
-
-/// The balance of a converged `solution`.
+/// The balance of a converged `solution` (the hierarchical solver's [`Balance`]), and the
+/// rays it cast.
 pub fn balance<V: Visibility + ?Sized>(
     scene: &Scene,
     mesh: &Mesh,
@@ -53,7 +38,7 @@ pub fn balance<V: Visibility + ?Sized>(
     direct: &[f64],
     exposed: &[f64],
     visibility: &V,
-) -> ExactBalance {
+) -> (Balance, u64) {
     let bands = scene.bands as usize;
     let reach = 2.0 * mesh.bounds.diagonal().max(f32::MIN_POSITIVE);
     // The front normal of every one-sided polygon (whose back absorbs what meets it).
@@ -62,15 +47,15 @@ pub fn balance<V: Visibility + ?Sized>(
         .iter()
         .map(|p| (!scene.materials[p.material].data.two_sided).then_some(p.normal))
         .collect();
-    let parts: Vec<ExactBalance> = (0..mesh.elements.len())
+    let parts: Vec<(Balance, u64)> = (0..mesh.elements.len())
         .into_par_iter()
         .map(|e| {
             let el = &mesh.elements[e];
             let m = mesh.material(scene, e);
-            let mut out = ExactBalance::default();
+            let (mut out, mut rays) = (Balance::default(), 0u64);
             let seen = el.area as f64 * exposed[e];
             if seen <= 0.0 {
-                return out;
+                return (out, rays);
             }
             let slots = [e, el.back_slot as usize];
             let sides = if el.back_slot == NONE { 1 } else { 2 };
@@ -107,18 +92,18 @@ pub fn balance<V: Visibility + ?Sized>(
                     &one_sided,
                     visibility,
                 );
-                out.rays += u64::from(RAYS_PER_SIDE);
+                rays += u64::from(RAYS_PER_SIDE);
                 for (k, &bk) in b.iter().enumerate() {
                     out.escaped[k] += seen * bk * escaped;
                     out.absorbed_backs[k] += seen * bk * backs;
                 }
             }
-            out
+            (out, rays)
         })
         .collect();
     // Summed in element order: the same total for any thread count.
-    let mut total = ExactBalance::default();
-    for p in &parts {
+    let (mut total, mut rays) = (Balance::default(), 0u64);
+    for (p, r) in &parts {
         for k in 0..bands {
             total.emitted[k] += p.emitted[k];
             total.direct[k] += p.direct[k];
@@ -126,9 +111,9 @@ pub fn balance<V: Visibility + ?Sized>(
             total.absorbed_backs[k] += p.absorbed_backs[k];
             total.escaped[k] += p.escaped[k];
         }
-        total.rays += p.rays;
+        rays += r;
     }
-    total
+    (total, rays)
 }
 
 /// The fractions of the light leaving side `slot` of element `e` (unit `normal` on that

@@ -55,7 +55,7 @@ mod quadrature;
 mod rays;
 mod solve;
 
-pub use balance::{ExactBalance, RAYS_PER_SIDE};
+pub use balance::RAYS_PER_SIDE;
 pub use error::ExactError;
 
 use crate::output::Progress;
@@ -162,8 +162,10 @@ pub struct ExactReport {
     pub matrix_seconds: f64,
     /// Bytes of the stored matrix.
     pub matrix_bytes: u64,
-    /// Where the power went (see `balance`); its rays are not counted in `rays`.
-    pub balance: ExactBalance,
+    /// Where the power went (see `balance`), by the hierarchical solver's accounting.
+    pub balance: hirad_core::hr::Balance,
+    /// Rays the balance cast (not counted in `rays`).
+    pub balance_rays: u64,
 }
 
 /// Solves `scene` with `visibility` (polygon ids = global ids of the expanded scene) and
@@ -267,7 +269,7 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
     )
     .map_err(|(iterations, error)| ExactError::NotConverged { iterations, error })?;
     progress.phase("power balance", None);
-    let power = balance::balance(
+    let (power, balance_rays) = balance::balance(
         scene,
         mesh,
         &quad,
@@ -293,6 +295,7 @@ fn run<S: Sink, R: PairRays + ?Sized, V: Visibility + ?Sized>(
         matrix_seconds,
         matrix_bytes: m.bytes(),
         balance: power,
+        balance_rays,
     })
 }
 
