@@ -22,6 +22,7 @@ mod census;
 mod closure;
 mod cluster_kernel;
 mod cone;
+mod correction_filter;
 mod direct;
 mod emitter_tree;
 mod error;

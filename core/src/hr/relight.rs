@@ -289,6 +289,7 @@ fn relight<V: Visibility + ?Sized, E: Executor>(
         );
         offset += n as u64;
     }
+    super::correction_filter::filter_corrections(st, ws, rays);
     if st.correction != NONE as usize && pass < CORRECTED_PASSES {
         // The links carry the change to everything it lights (a defect correction).
         let tol = st.settings.tolerance;
