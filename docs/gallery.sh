@@ -41,11 +41,12 @@ else
     work=${GALLERY_WORK:-$target/gallery}
 fi
 
-# The commands of gallery.md's sh blocks, one a line: "slow<TAB>command" or "quick<TAB>command".
-# A `<!-- slow: REASON -->` comment on the lines just before a fence marks its block slow (the
-# convention of the docs test); other comments there (`<!-- warns: ... -->`) are kept.
+# The commands of gallery.md's sh blocks, one a line: "slow|quick<TAB>WARNS<TAB>command". As in
+# the docs test, a `<!-- slow: REASON -->` comment on the lines just before a fence marks its
+# block slow, and each `<!-- warns: TEXT -->` there names a warning the block's commands may
+# print (WARNS: those texts joined by \x1f, or - for none); any other warning fails the run.
 commands=$(awk '
-    function reset() { slow = 0 }
+    function reset() { slow = 0; warns = "" }
     inblock && /^[[:space:]]*```[[:space:]]*$/ { inblock = 0; reset(); next }
     inblock {
         if (!run) next
@@ -53,10 +54,19 @@ commands=$(awk '
         sub(/^[[:space:]]+/, "", line)
         if (line == "" || line ~ /^#/) next
         if (line ~ /\\$/) { print "gallery.md:" NR ": a continued line: write each command on one line" > "/dev/stderr"; exit 1 }
-        print (blockslow ? "slow" : "quick") "\t" line
+        print (blockslow ? "slow" : "quick") "\t" (blockwarns == "" ? "-" : blockwarns) "\t" line
         next
     }
-    /^[[:space:]]*<!--.*-->[[:space:]]*$/ { if ($0 ~ /<!--[[:space:]]*slow:/) slow = 1; next }
+    /^[[:space:]]*<!--.*-->[[:space:]]*$/ {
+        if ($0 ~ /<!--[[:space:]]*slow:/) slow = 1
+        if ($0 ~ /<!--[[:space:]]*warns:/) {
+            text = $0
+            sub(/^[[:space:]]*<!--[[:space:]]*warns:[[:space:]]*/, "", text)
+            sub(/[[:space:]]*-->[[:space:]]*$/, "", text)
+            warns = (warns == "" ? text : warns "\037" text)
+        }
+        next
+    }
     /^[[:space:]]*```/ {
         info = $0
         sub(/^[[:space:]]*```/, "", info)
@@ -64,6 +74,7 @@ commands=$(awk '
         if (w[1] == "console") { print "gallery.md:" NR ": console blocks are not supported here" > "/dev/stderr"; exit 1 }
         run = (w[1] == "sh" || w[1] == "bash")
         blockslow = slow
+        blockwarns = warns
         inblock = 1
         next
     }
@@ -140,7 +151,7 @@ write_times() {
 rows=()
 pictures=()
 n=0
-while IFS=$'\t' read -r kind cmd; do
+while IFS=$'\t' read -r kind warns cmd; do
     read -r -a words <<<"$cmd"
     case ${words[0]} in
     hirad) ;;
@@ -168,6 +179,23 @@ while IFS=$'\t' read -r kind cmd; do
     fi
     end=$(date +%s.%N)
     seconds=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }')
+    # A warning the page does not name fails the run, as in the docs test.
+    unnamed=$(grep -i warning "$log" | while IFS= read -r line; do
+        named=0
+        if [ "$warns" != - ]; then
+            IFS=$'\037' read -r -a texts <<<"$warns"
+            for t in "${texts[@]}"; do
+                case $line in *"$t"*) named=1 ;; esac
+            done
+        fi
+        if [ $named = 0 ]; then echo "$line"; fi
+    done)
+    if [ -n "$unnamed" ]; then
+        echo "warned: $cmd (log $log):" >&2
+        echo "$unnamed" >&2
+        write_times "\`$cmd\` warned: $unnamed"
+        exit 1
+    fi
     grep -i warning "$log" >&2 || true
     echo "  $seconds s" >&2
     rows+=("| \`$cmd\` | $seconds | $load |")

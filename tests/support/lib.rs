@@ -5,6 +5,7 @@ use hirad::scene::{Scene, read_image};
 use hirad::solve::{RayonExecutor, world_polygons};
 use hirad::visibility::ObvhsVisibility;
 use hirad_core::hr::{self, HrError, Progress, Settings, SolveError, Stats};
+use hirad_core::sink::Sink;
 use std::path::PathBuf;
 
 pub mod sample;
@@ -16,29 +17,38 @@ pub fn solve_hr<P: Progress>(
     settings: &Settings,
     progress: &mut P,
 ) -> Result<(ResultsTable, Stats), HrError> {
+    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
+    let mut table = ResultsTable::new(scene.bands as usize, two_sided);
+    let stats = solve_hr_into(scene, settings, progress, &mut table).map_err(|e| match e {
+        SolveError::Hr(h) => h,
+        SolveError::Sink(_) => unreachable!("the table never refuses"),
+    })?;
+    Ok((table, stats))
+}
+
+/// [`solve_hr`] into any sink (every leaf patch, then every polygon).
+pub fn solve_hr_into<P: Progress, S: Sink>(
+    scene: &Scene,
+    settings: &Settings,
+    progress: &mut P,
+    sink: &mut S,
+) -> Result<Stats, SolveError<S::Error>> {
     let bytes = hirad::scene::compile(scene).unwrap();
     let view = read_image(&bytes).unwrap();
     let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
     let plan = hr::plan(&view, settings, false, &mut scratch)?;
     let mut ws = vec![0u8; plan.suggested_bytes as usize];
-    let two_sided = scene.materials.iter().any(|m| m.data.two_sided);
-    let mut table = ResultsTable::new(scene.bands as usize, two_sided);
     let vis = ObvhsVisibility::new(&world_polygons(scene)).unwrap();
     let mut exec = RayonExecutor::new(2).unwrap();
-    let stats = hr::solve(
+    hr::solve(
         &view,
         settings,
         &mut ws,
         Some(&vis),
         &mut exec,
         progress,
-        &mut table,
+        sink,
     )
-    .map_err(|e| match e {
-        SolveError::Hr(h) => h,
-        SolveError::Sink(_) => unreachable!("the table never refuses"),
-    })?;
-    Ok((table, stats))
 }
 
 /// Path of a file in `fixtures/`.

@@ -10,7 +10,8 @@
 //! child keeps `n / (n + MIN_RAYS)` of its departure from its siblings' mean, `n` the rays
 //! its share of the polygon's stood on: a correction from many rays stays, one from a ray
 //! or two follows its parent's. Siblings are shrunk alike around their exposed-area mean,
-//! so a polygon's corrected power is unchanged.
+//! so a polygon's corrected power is unchanged (unless a leaf's light would go negative: it
+//! stops at zero).
 //!
 //! Measured on 2026-12-04 (`hirad solve SCENE --image H.exr --size 400x400
 //! --reference-image E.exr` against `--method exact`): Cornell box 0.884% -> 0.822% at the
@@ -124,10 +125,21 @@ pub(crate) fn filter_corrections(st: &State, ws: &mut [u8], rays: u32) {
                 }
                 for j in 0..4 {
                     let child = Elem::new(kind, p.first_child + j);
+                    // A leaf's irradiance without its correction: what the shrunk
+                    // correction may take away at most (light is never negative).
+                    let mut base = [f32::INFINITY; 8];
+                    if st.patch(ws, child).first_child == NONE {
+                        super::closure::leaf_irradiance(st, ws, child, side, &mut base[..nb]);
+                        if let Some(c) = st.correction(ws, child, side) {
+                            for (v, c) in base.iter_mut().zip(c) {
+                                *v -= c;
+                            }
+                        }
+                    }
                     if let Some(c) = st.correction_mut(ws, child, side) {
                         for b in 0..nb {
                             let own = c[b] as f64 - mean[b];
-                            c[b] = value[b] + (keep as f64 * own) as f32;
+                            c[b] = (value[b] + (keep as f64 * own) as f32).max(-base[b]);
                         }
                     }
                 }
