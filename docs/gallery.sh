@@ -180,7 +180,7 @@ while IFS=$'\t' read -r kind warns cmd; do
     end=$(date +%s.%N)
     seconds=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }')
     # A warning the page does not name fails the run, as in the docs test.
-    unnamed=$(grep -i warning "$log" | while IFS= read -r line; do
+    unnamed=$({ grep -i warning "$log" || true; } | while IFS= read -r line; do
         named=0
         if [ "$warns" != - ]; then
             IFS=$'\037' read -r -a texts <<<"$warns"
