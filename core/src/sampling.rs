@@ -102,22 +102,7 @@ pub fn clipped_quadrature(
 ) -> usize {
     let m = corners.len().min(4);
     let mut clipped = [Vec3::ZERO; 5];
-    let mut k = 0;
-    for i in 0..m {
-        let (a, b) = (corners[i], corners[(i + 1) % m]);
-        let (da, db) = (normal.dot(a - on_plane), normal.dot(b - on_plane));
-        if da > 0.0 && k < 5 {
-            clipped[k] = a;
-            k += 1;
-        }
-        if (da > 0.0) != (db > 0.0) && k < 5 {
-            let t = da / (da - db);
-            if t.is_finite() {
-                clipped[k] = a + (b - a) * t;
-                k += 1;
-            }
-        }
-    }
+    let k = clip_front(corners, on_plane, normal, &mut clipped);
     let whole = polygon_area(&corners[..m]);
     if k < 3 || whole <= 0.0 {
         return 0;
@@ -133,6 +118,74 @@ pub fn clipped_quadrature(
         }
     }
     n
+}
+
+/// Clips a convex triangle or quad to the half-space `normal . (y - on_plane) > 0`; returns
+/// the corner count written to `out` (below 3 when nothing is in front).
+fn clip_front(corners: &[Vec3], on_plane: Vec3, normal: Vec3, out: &mut [Vec3; 5]) -> usize {
+    let m = corners.len().min(4);
+    let mut k = 0;
+    for i in 0..m {
+        let (a, b) = (corners[i], corners[(i + 1) % m]);
+        let (da, db) = (normal.dot(a - on_plane), normal.dot(b - on_plane));
+        if da > 0.0 && k < 5 {
+            out[k] = a;
+            k += 1;
+        }
+        if (da > 0.0) != (db > 0.0) && k < 5 {
+            let t = da / (da - db);
+            if t.is_finite() {
+                out[k] = a + (b - a) * t;
+                k += 1;
+            }
+        }
+    }
+    k
+}
+
+/// A point drawn uniformly by area over the part of a convex triangle or quad in front of a
+/// plane (through `on_plane`, normal `normal`), from three numbers in [0, 1): `pick` chooses
+/// a triangle of the clipped polygon's fan by area, `u`, `v` a point in it. `None` when
+/// nothing is in front. Unlike drawing over the whole polygon until a point lands in front,
+/// it never gives up on a polygon that shows only a sliver.
+pub fn point_in_front(
+    corners: &[Vec3],
+    on_plane: Vec3,
+    normal: Vec3,
+    pick: f32,
+    u: f32,
+    v: f32,
+) -> Option<Vec3> {
+    let mut clipped = [Vec3::ZERO; 5];
+    let k = clip_front(corners, on_plane, normal, &mut clipped);
+    if k < 3 {
+        return None;
+    }
+    let tri = |t: usize| {
+        let (a, b, c) = (clipped[0], clipped[t], clipped[t + 1]);
+        (b - a).cross(c - a).length()
+    };
+    let total: f32 = (1..k - 1).map(tri).sum();
+    if !(total > 0.0) {
+        return None;
+    }
+    let mut target = pick * total;
+    let mut t = k - 2;
+    for i in 1..k - 1 {
+        let a = tri(i);
+        if target < a {
+            t = i;
+            break;
+        }
+        target -= a;
+    }
+    let (u, v) = if u + v > 1.0 {
+        (1.0 - u, 1.0 - v)
+    } else {
+        (u, v)
+    };
+    let (a, b, c) = (clipped[0], clipped[t], clipped[t + 1]);
+    Some(a + (b - a) * u + (c - a) * v)
 }
 
 /// Area of a planar convex polygon (m^2).

@@ -22,7 +22,9 @@ use super::ids::Elem;
 use super::state::State;
 use crate::formfactor::{facing_side, point_polygon};
 use crate::limits::NONE;
-use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
+use crate::sampling::{
+    MAX_CLIPPED_QUADRATURE, clipped_quadrature, hash3, point_in_front, point_on, subdivide, unit2,
+};
 use crate::visibility::Visibility;
 use glam::Vec3;
 
@@ -262,19 +264,19 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
 }
 
 /// One emitting polygon as a leaf patch sees it: its importance (largest exitance x
-/// estimated unoccluded form factor from the leaf), the side it shows, and whether its light
-/// is integrated from the emitter's side (an emitter no larger than the leaf: reciprocity,
-/// smooth where a point-by-point form factor would peak under a small lamp).
+/// estimated unoccluded form factor from the leaf, over the sides that reach the leaf), and
+/// whether its light is integrated from the emitter's side (an emitter no larger than the
+/// leaf: reciprocity, smooth where a point-by-point form factor would peak under a small
+/// lamp).
 #[derive(Clone, Copy, Debug, Default)]
 struct Share {
     weight: f32,
-    side: usize,
     reciprocal: bool,
-    /// For `reciprocal`: the emitter's form factor to the whole leaf times its area over the
-    /// leaf's, over the emitter's quadrature points (the form factor to a leaf whose edge
-    /// passes under a small lamp changes across the lamp). It does not depend on the
-    /// sample point.
-    f_leaf: f32,
+    /// For `reciprocal`, per emitting side: that side's form factor to the part of the leaf
+    /// in front of it, times its area over the leaf's, over quadrature points of the part of
+    /// the emitter in front of the leaf (the form factor to a leaf whose edge passes under a
+    /// small lamp changes across the lamp). It does not depend on the sample point.
+    f_leaf: [f32; 2],
 }
 
 /// A sample point of a receiving leaf patch of polygon `poly`, facing `nrm`.
@@ -285,6 +287,9 @@ pub(crate) struct Receiver {
 }
 
 /// Fills `shares` for a leaf patch (`corners`, receiving normal `nrm`); returns their sum.
+/// An emitter's side counts where any corner of the leaf lies in front of it: a leaf across
+/// an emitter's plane gets the light of the part of it in front, whichever side its centre
+/// is on.
 fn emitter_shares(
     st: &State,
     ws: &[u8],
@@ -306,45 +311,54 @@ fn emitter_shares(
         let lp = st.polygon(ws, l);
         let (lc, k) = patch_corners(st, ws, Elem(lp.root));
         let l_normal = Vec3::from(lp.normal);
-        let Some(side) = facing_side(centre, lc[0], l_normal) else {
-            continue;
-        };
         let m = st.material(ws, lp.material);
-        let e_max = m.emit[side][..nb].iter().copied().fold(0.0f32, f32::max);
-        if e_max <= 0.0 {
-            continue;
-        }
         let l_area = polygon_area(&lc[..k]);
-        let reciprocal = l_area <= area;
-        let f = if reciprocal && area > 0.0 {
-            let lcen = lc[..k].iter().copied().sum::<Vec3>() / k as f32;
-            let ln = if side == 0 { l_normal } else { -l_normal };
-            l_area * point_polygon(lcen, ln, corners) / area
-        } else {
-            point_polygon(centre, nrm, &lc[..k])
-        };
-        // Seen at the centre or not, a part of the emitter may show elsewhere on the leaf:
-        // keep a floor so that it can still be drawn.
-        let f = if f.is_finite() { f.max(1e-6) } else { 0.0 };
-        let f_leaf = if reciprocal && area > 0.0 {
-            let ln = if side == 0 { l_normal } else { -l_normal };
-            let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
-            let q = quadrature(&lc[..k], &mut pts, &mut wts);
-            let mut fq = 0.0f32;
-            for (p, w) in pts[..q].iter().zip(&wts[..q]) {
-                fq += w * point_polygon(*p, ln, corners);
+        let reciprocal = l_area <= area && area > 0.0;
+        s.reciprocal = reciprocal;
+        for side in 0..2 {
+            let e_max = m.emit[side][..nb].iter().copied().fold(0.0f32, f32::max);
+            let reaches = corners
+                .iter()
+                .any(|&c| facing_side(c, lc[0], l_normal) == Some(side));
+            if e_max <= 0.0 || !reaches {
+                continue;
             }
-            l_area * fq / area
-        } else {
-            0.0
-        };
-        *s = Share {
-            weight: e_max * f,
-            side,
-            reciprocal,
-            f_leaf,
-        };
-        total += e_max * f;
+            let ln = if side == 0 { l_normal } else { -l_normal };
+            let f = if reciprocal {
+                // Over the part of the emitter in front of the leaf: a point behind the
+                // leaf's plane sees its back (a lamp straddling the plane of a block's face
+                // lit that face 2.7 times too brightly). The emitter in 4 pieces, each
+                // clipped: the form factor to a leaf a few emitter sizes away varies too
+                // much over it for one low-order rule.
+                let mut pieces = [[Vec3::ZERO; 4]; 4];
+                let count = subdivide(&lc[..k], &mut pieces);
+                let mut fq = 0.0f32;
+                for piece in &pieces[..count] {
+                    let (mut pts, mut wts) = (
+                        [Vec3::ZERO; MAX_CLIPPED_QUADRATURE],
+                        [0.0f32; MAX_CLIPPED_QUADRATURE],
+                    );
+                    let c = &piece[..k];
+                    let q = clipped_quadrature(c, corners[0], nrm, &mut pts, &mut wts);
+                    let share = polygon_area(c) / l_area;
+                    for (p, w) in pts[..q].iter().zip(&wts[..q]) {
+                        fq += share * w * point_polygon(*p, ln, corners);
+                    }
+                }
+                let f = l_area * fq / area;
+                s.f_leaf[side] = if f.is_finite() { f } else { 0.0 };
+                s.f_leaf[side]
+            } else if facing_side(centre, lc[0], l_normal) == Some(side) {
+                point_polygon(centre, nrm, &lc[..k])
+            } else {
+                0.0
+            };
+            // Seen at the centre or not, a part of the emitter may show elsewhere on the
+            // leaf: keep a floor so that it can still be drawn.
+            let f = if f.is_finite() { f.max(1e-6) } else { 0.0 };
+            s.weight += e_max * f;
+        }
+        total += s.weight;
     }
     total
 }
@@ -397,32 +411,38 @@ fn emitted_light<V: Visibility + ?Sized>(
     let (lc, k) = patch_corners(st, ws, Elem(lp.root));
     let m = st.material(ws, lp.material);
     let (x, n) = (leaf.x, leaf.nrm);
-    // A point of the emitter in front of x (a few draws: an emitter that straddles the
-    // plane of x shows only part of itself).
-    for attempt in 0..8u32 {
-        let (u, v) = unit2(hash3(h, attempt, 0x9E));
-        let y = point_on(&lc[..k], u, v);
-        if n.dot(y - x) <= 0.0 {
-            continue;
-        }
-        let f = if share.reciprocal {
-            share.f_leaf
-        } else {
-            point_polygon(x, n, &lc[..k])
-        };
-        if !(f.is_finite() && f > 0.0) {
-            return 1;
-        }
-        let t = vis.transmittance(x, y, [leaf.poly, l]);
-        if t > 0.0 {
-            let scale = t * f * total / share.weight;
-            for (ck, e) in c.iter_mut().zip(&m.emit[share.side][..nb]) {
-                *ck += scale * e;
+    // A point of the part of the emitter in front of x (an emitter that straddles the plane
+    // of x shows only part of itself; its share above integrates over that part).
+    let (u, v) = unit2(hash3(h, 0, 0x9E));
+    let pick = unit2(hash3(h, 1, 0x9E)).0;
+    let Some(y) = point_in_front(&lc[..k], x, n, pick, u, v) else {
+        return 0;
+    };
+    // Per emitting side, the form factor that multiplies its exitance.
+    let mut f = [0.0f32; 2];
+    if share.reciprocal {
+        f = share.f_leaf;
+    } else if let Some(side) = facing_side(x, lc[0], Vec3::from(lp.normal)) {
+        // Only the side x lies in front of sends it light (a leaf across the plane of a
+        // lamp, its centre in front, has points behind it).
+        f[side] = point_polygon(x, n, &lc[..k]);
+    }
+    if !f.iter().any(|v| v.is_finite() && *v > 0.0) {
+        return 0;
+    }
+    let t = vis.transmittance(x, y, [leaf.poly, l]);
+    if t > 0.0 {
+        let scale = t * total / share.weight;
+        for (side, fs) in f.iter().enumerate() {
+            if !(fs.is_finite() && *fs > 0.0) {
+                continue;
+            }
+            for (ck, e) in c.iter_mut().zip(&m.emit[side][..nb]) {
+                *ck += scale * fs * e;
             }
         }
-        return 1;
     }
-    0
+    1
 }
 
 /// A patch's corners and their count.
