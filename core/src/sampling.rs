@@ -166,7 +166,7 @@ pub fn point_in_front(
         (b - a).cross(c - a).length()
     };
     let total: f32 = (1..k - 1).map(tri).sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return None;
     }
     let mut target = pick * total;
