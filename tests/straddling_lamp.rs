@@ -21,29 +21,43 @@ fn square(c: DVec3, n: DVec3, size: f64) -> [DVec3; 4] {
     [c - u - v, c + u - v, c + u + v, c - u + v]
 }
 
-/// The mean irradiance (W/m^2) over `face` (normal `nf`) from a Lambertian `lamp` (normal
+/// The mean irradiance (W/m^2) over `face` (normal `nf`) from a Lambertian lamp (normal
 /// `nl`) of exitance `e`, unoccluded, counting only lamp points in front of the face's plane
-/// and face points in front of the lamp's.
-fn reference(face: &[DVec3; 4], nf: DVec3, lamp: &[DVec3; 4], nl: DVec3, e: f64) -> f64 {
+/// and face points in front of the lamp's. The lamp is the parallelogram `lamp`, or with
+/// `triangle` its half `lamp[0], lamp[1], lamp[3]`.
+fn reference(
+    face: &[DVec3; 4],
+    nf: DVec3,
+    lamp: &[DVec3; 4],
+    triangle: bool,
+    nl: DVec3,
+    e: f64,
+) -> f64 {
     let (nr, ne) = (16, 48);
-    let at = |q: &[DVec3; 4], i: usize, j: usize, n: usize| {
-        let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
-        q[0] + (q[1] - q[0]) * u + (q[3] - q[0]) * v
-    };
+    let at = |q: &[DVec3; 4], u: f64, v: f64| q[0] + (q[1] - q[0]) * u + (q[3] - q[0]) * v;
+    let mid = |i: usize, n: usize| (i as f64 + 0.5) / n as f64;
     let da = (lamp[1] - lamp[0]).cross(lamp[3] - lamp[0]).length() / (ne * ne) as f64;
     let mut sum = 0.0;
     for i in 0..nr {
         for j in 0..nr {
-            let x = at(face, i, j, nr);
+            let x = at(face, mid(i, nr), mid(j, nr));
             let mut h = 0.0;
             for a in 0..ne {
                 for b in 0..ne {
-                    let y = at(lamp, a, b, ne);
-                    let d = y - x;
+                    let (u, v) = (mid(a, ne), mid(b, ne));
+                    // Cells on the triangle's diagonal count half.
+                    let w = if !triangle || a + b + 1 < ne {
+                        1.0
+                    } else if a + b + 1 == ne {
+                        0.5
+                    } else {
+                        0.0
+                    };
+                    let d = at(lamp, u, v) - x;
                     let r2 = d.length_squared();
                     let (cf, cl) = (nf.dot(d), -nl.dot(d));
-                    if cf > 0.0 && cl > 0.0 {
-                        h += cf * cl / (r2 * r2) * da;
+                    if w > 0.0 && cf > 0.0 && cl > 0.0 {
+                        h += w * cf * cl / (r2 * r2) * da;
                     }
                 }
             }
@@ -53,8 +67,9 @@ fn reference(face: &[DVec3; 4], nf: DVec3, lamp: &[DVec3; 4], nl: DVec3, e: f64)
     sum / (nr * nr) as f64
 }
 
-fn quad_text(mat: &str, q: &[DVec3; 4]) -> String {
-    let mut t = format!("quad {mat}");
+fn quad_text(mat: &str, q: &[DVec3]) -> String {
+    let kind = if q.len() == 3 { "tri" } else { "quad" };
+    let mut t = format!("{kind} {mat}");
     for p in q {
         t += &format!("  {} {} {}", p.x, p.y, p.z);
     }
@@ -92,7 +107,7 @@ fn pieces(face: &[DVec3; 4], n: usize) -> Vec<[DVec3; 4]> {
 fn faces_whose_plane_cuts_the_lamp_get_the_light_of_the_part_in_front() {
     let mut r = Rng(0x57AD, 0);
     let e = 100.0;
-    for case in 0..12 {
+    for case in 0..16 {
         let scale = 10f64.powf(r.range(-2.0, 2.0) as f64);
         let lamp_size = scale * r.range(0.5, 1.5) as f64;
         let nl = unit(&mut r);
@@ -109,9 +124,14 @@ fn faces_whose_plane_cuts_the_lamp_get_the_light_of_the_part_in_front() {
             }
         };
         let centre = dir * lamp_size * r.range(2.0, 6.0) as f64;
-        let through = lamp[0]
-            + (lamp[1] - lamp[0]) * r.range(0.1, 0.9) as f64
-            + (lamp[3] - lamp[0]) * r.range(0.1, 0.9) as f64;
+        // Every other lamp a triangle (OBJ lamps are): the gather integrates triangles and
+        // quads apart.
+        let triangle = case % 2 == 1;
+        let (mut u, mut v) = (r.range(0.1, 0.9) as f64, r.range(0.1, 0.9) as f64);
+        if triangle && u + v > 1.0 {
+            (u, v) = (1.0 - u, 1.0 - v);
+        }
+        let through = lamp[0] + (lamp[1] - lamp[0]) * u + (lamp[3] - lamp[0]) * v;
         let along = (through - centre).normalize();
         let nf = loop {
             let n = unit(&mut r);
@@ -129,14 +149,18 @@ fn faces_whose_plane_cuts_the_lamp_get_the_light_of_the_part_in_front() {
         for p in &parts {
             text += &quad_text("black", p);
         }
-        text += &quad_text("lamp", &lamp);
+        if triangle {
+            text += &quad_text("lamp", &[lamp[0], lamp[1], lamp[3]]);
+        } else {
+            text += &quad_text("lamp", &lamp);
+        }
         text += "}\n";
         let scene = hirad::text::parse(text.as_bytes()).unwrap();
         let (table, _) =
             hirad_tests::solve_hr(&scene, &Settings::default(), &mut NoProgress).unwrap();
         let want: Vec<f64> = parts
             .iter()
-            .map(|p| reference(p, nf, &lamp, nl, e))
+            .map(|p| reference(p, nf, &lamp, triangle, nl, e))
             .collect();
         let peak = want.iter().copied().fold(0.0, f64::max);
         assert!(peak > 0.0, "case {case}: the lamp lights nothing\n{text}");

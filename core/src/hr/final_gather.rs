@@ -331,9 +331,10 @@ fn emitter_shares(
                 // clipped: the form factor to a leaf a few emitter sizes away varies too
                 // much over it for one low-order rule.
                 let mut pieces = [[Vec3::ZERO; 4]; 4];
-                let count = subdivide(&lc[..k], &mut pieces);
+                // (4 pieces of the emitter's corner count, which `subdivide` returns.)
+                subdivide(&lc[..k], &mut pieces);
                 let mut fq = 0.0f32;
-                for piece in &pieces[..count] {
+                for piece in &pieces {
                     let (mut pts, mut wts) = (
                         [Vec3::ZERO; MAX_CLIPPED_QUADRATURE],
                         [0.0f32; MAX_CLIPPED_QUADRATURE],
