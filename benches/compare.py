@@ -27,7 +27,7 @@ def main():
         i = int(a['id'])
         if i in skip or (only is not None and i not in only):
             continue
-        area = float(a['area'])
+        area = float(a['area_m2'] if 'area_m2' in a else a['area'])
         for c in cols:
             r, g = float(a[c]), float(b[c])
             top = max(top, r)
