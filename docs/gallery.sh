@@ -2,7 +2,7 @@
 # Makes every picture of docs/gallery.md with the commands that page shows, and times them.
 #
 #   docs/gallery.sh          builds hirad in release, runs every command of the `sh` blocks of
-#                            docs/gallery.md in order, copies the pictures (--image) into
+#                            docs/gallery.md in order, copies the PNG pictures (--image) into
 #                            docs/images/ and writes the wall time of each command, with the
 #                            machine's core count and load average, to docs/gallery-times.md
 #   docs/gallery.sh --quick  only the commands not marked `<!-- slow: ... -->` (the small
@@ -223,8 +223,11 @@ if [ $quick = 0 ]; then
             exit 1
         fi
     done
+    # The PNGs (the page shows them); EXR pictures are references for --reference-image.
     for p in "${pictures[@]}"; do
-        cp "$work/$p" "$repo/docs/images/$p"
+        case $p in
+        *.png) cp "$work/$p" "$repo/docs/images/$p" ;;
+        esac
     done
     echo "pictures copied into docs/images/; times in $times" >&2
 else
