@@ -9,6 +9,7 @@
 //! * [`bvh`]: a bounding-volume hierarchy built in caller storage, and visibility through it.
 //! * [`hr`]: hierarchical radiosity with clustering in one caller-provided workspace.
 //! * [`sink`], [`visibility`]: where results go and where rays come from.
+//! * [`tables`]: directional tables of originals (the equal-area direction grid).
 //!
 //! Units: lengths in metres (any unit works as long as it is consistent: nothing in the core
 //! uses an absolute tolerance), exitance, irradiance and radiosity in W/m^2.
@@ -31,6 +32,7 @@ pub mod limits;
 pub mod material;
 pub mod sampling;
 pub mod sink;
+pub mod tables;
 pub mod visibility;
 
 pub use handles::*;
