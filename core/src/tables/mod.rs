@@ -1,7 +1,11 @@
 //! Directional tables of originals: what a closed instance knows about its contents as
-//! functions of direction (issue 17). So far the direction grid they are sampled on.
+//! functions of direction (issue 17). So far the direction grid they are sampled on, the
+//! box's projected area and the uncollided transmittance.
 
 pub mod grid;
+pub mod tau;
 
 #[cfg(test)]
 mod tests_grid;
+#[cfg(test)]
+mod tests_tau;

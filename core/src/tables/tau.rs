@@ -1,0 +1,121 @@
+//! The two geometric functions of an original's directional table (paper section 3.1): the
+//! projected area `A(dir)` of its bounding box (m^2, analytic) and its uncollided
+//! transmittance `tau(dir)` (dimensionless, 0..=1): the fraction of parallel rays along
+//! `dir` across the box's projection that cross the box without meeting a polygon.
+
+use crate::limits::NONE;
+use crate::sampling::{hash3, unit2};
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// The area (m^2) of the shadow of the box `[lo, hi]` on a plane perpendicular to the unit
+/// direction `d`: the faces' areas weighted by their cosines, `|dx| Sy Sz + |dy| Sx Sz +
+/// |dz| Sx Sy` (`S` the box's sizes).
+pub fn projected_area(lo: Vec3, hi: Vec3, d: Vec3) -> f32 {
+    let s = (hi - lo).max(Vec3::ZERO);
+    let a = d.abs();
+    a.x * s.y * s.z + a.y * s.x * s.z + a.z * s.x * s.y
+}
+
+/// One estimate of `tau` along a direction.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TauEstimate {
+    /// Uncollided transmittance: rays that crossed unblocked over rays that crossed the box.
+    pub tau: f32,
+    /// Rays that crossed the box (those of the grid inside its projection).
+    pub rays: u32,
+    /// The box's projected area measured by the same grid (m^2): a check of the sampling
+    /// against [`projected_area`].
+    pub area: f32,
+}
+
+/// `tau` along the unit direction `d` through the box `[lo, hi]` of an original whose
+/// polygons `vis` knows, from a stratified `g x g` grid of parallel rays (jittered by
+/// `seed`) over the rectangle that bounds the box's projection. Each ray runs from where it
+/// enters the box to where it leaves; a ray that misses the box is not counted.
+pub fn tau<V: Visibility + ?Sized>(
+    vis: &V,
+    lo: Vec3,
+    hi: Vec3,
+    d: Vec3,
+    g: u32,
+    seed: u32,
+) -> TauEstimate {
+    let d = d.normalize_or_zero();
+    if d == Vec3::ZERO || g == 0 {
+        return TauEstimate::default();
+    }
+    let (e1, e2) = frame(d);
+    let centre = (lo + hi) * 0.5;
+    // The rectangle spanned by the projected corners, around the centre.
+    let (mut s_max, mut t_max) = (0.0f32, 0.0f32);
+    for k in 0..8 {
+        let c = Vec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        ) - centre;
+        s_max = s_max.max(c.dot(e1).abs());
+        t_max = t_max.max(c.dot(e2).abs());
+    }
+    let reach = (hi - lo).length();
+    let cell = 4.0 * s_max * t_max / (g * g) as f32;
+    let (mut crossed, mut clear) = (0u32, 0u32);
+    for j in 0..g {
+        for i in 0..g {
+            let (ju, jv) = unit2(hash3(seed, j * g + i, 0x7A0));
+            let s = ((i as f32 + ju) / g as f32 * 2.0 - 1.0) * s_max;
+            let t = ((j as f32 + jv) / g as f32 * 2.0 - 1.0) * t_max;
+            let on = centre + e1 * s + e2 * t;
+            let Some((t0, t1)) = slab(on - d * reach, d, lo, hi) else {
+                continue;
+            };
+            if t1 <= t0 {
+                continue;
+            }
+            crossed += 1;
+            let from = on - d * reach + d * t0;
+            let to = on - d * reach + d * t1;
+            if vis.transmittance(from, to, [NONE, NONE]) > 0.5 {
+                clear += 1;
+            }
+        }
+    }
+    TauEstimate {
+        tau: if crossed > 0 {
+            clear as f32 / crossed as f32
+        } else {
+            1.0
+        },
+        rays: crossed,
+        area: crossed as f32 * cell,
+    }
+}
+
+/// Two unit vectors that make a right-handed orthonormal frame with the unit `d`.
+fn frame(d: Vec3) -> (Vec3, Vec3) {
+    let t = if d.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let e1 = d.cross(t).normalize();
+    (e1, d.cross(e1))
+}
+
+/// Where the ray `o + t d` enters and leaves the box `[lo, hi]` (its parameters), if it
+/// meets it.
+fn slab(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<(f32, f32)> {
+    let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+    for a in 0..3 {
+        if d[a].abs() < 1e-12 {
+            if o[a] < lo[a] || o[a] > hi[a] {
+                return None;
+            }
+            continue;
+        }
+        let (mut n, mut f) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+        if n > f {
+            core::mem::swap(&mut n, &mut f);
+        }
+        t0 = t0.max(n);
+        t1 = t1.min(f);
+    }
+    (t0 <= t1).then_some((t0, t1))
+}
