@@ -8,7 +8,7 @@ use crate::visibility::Visibility;
 use glam::{Vec2, Vec3};
 
 /// Leaves: planar quads, brute-force segment tests (the table's own rays go through this).
-struct Leaves(Vec<[Vec3; 4]>);
+pub(super) struct Leaves(pub(super) Vec<[Vec3; 4]>);
 
 /// Moller-Trumbore on one triangle: the segment `from -> to` meets it strictly inside.
 fn meets(from: Vec3, to: Vec3, a: Vec3, b: Vec3, c: Vec3) -> bool {
@@ -43,7 +43,7 @@ impl Visibility for Leaves {
 extern crate std;
 use std::vec::Vec;
 
-fn unit(k: u32, seed: u32) -> Vec3 {
+pub(super) fn unit(k: u32, seed: u32) -> Vec3 {
     let (a, b) = unit2(hash3(k, seed, 0xBA11));
     let z = 1.0 - 2.0 * a;
     let r = libm::sqrtf((1.0 - z * z).max(0.0));
@@ -53,7 +53,13 @@ fn unit(k: u32, seed: u32) -> Vec3 {
 
 /// `count` square leaves of side `size` at random places and tilts in a ball of `radius`
 /// around `centre`; returns them and their bounding box.
-fn ball(count: u32, radius: f32, size: f32, centre: Vec3, seed: u32) -> (Leaves, Vec3, Vec3) {
+pub(super) fn ball(
+    count: u32,
+    radius: f32,
+    size: f32,
+    centre: Vec3,
+    seed: u32,
+) -> (Leaves, Vec3, Vec3) {
     let mut leaves = Vec::new();
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for k in 0..count {
@@ -92,7 +98,7 @@ fn inside(p: Vec2, poly: &[Vec2]) -> bool {
 /// The box's shadow and the part of it the leaves leave open, on an `n x n` raster of the
 /// plane perpendicular to `d`: (open fraction, shadow area m^2). The box's shadow is the
 /// union of its six faces' projections.
-fn projection(leaves: &Leaves, lo: Vec3, hi: Vec3, d: Vec3, n: u32) -> (f32, f32) {
+pub(super) fn projection(leaves: &Leaves, lo: Vec3, hi: Vec3, d: Vec3, n: u32) -> (f32, f32) {
     let t = if d.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
     let e1 = d.cross(t).normalize();
     let e2 = d.cross(e1);
