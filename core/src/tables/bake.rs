@@ -65,7 +65,9 @@ pub enum BakeError {
 }
 
 /// Fills `out` with `tau` at every cell centre of `grid` (`out` at least `grid.cells()`
-/// long); returns the rays cast.
+/// long); returns the rays cast. A line crosses the same polygons both ways, so
+/// `tau(-d) = tau(d)`, and a grid of even side maps the centre of a cell to the centre of
+/// its antipodal cell: each such pair is estimated once.
 pub fn bake_tau<V: Visibility + ?Sized>(
     vis: &V,
     lo: Vec3,
@@ -75,16 +77,23 @@ pub fn bake_tau<V: Visibility + ?Sized>(
     out: &mut [f32],
 ) -> u64 {
     let mut rays = 0u64;
-    for (c, v) in out.iter_mut().enumerate().take(grid.cells() as usize) {
+    let cells = grid.cells().min(out.len() as u32);
+    for c in 0..cells {
+        let d = grid.direction(c);
+        let opposite = grid.cell_of(-d);
+        if opposite < c && (grid.direction(opposite) + d).length() < 1e-4 {
+            out[c as usize] = out[opposite as usize];
+            continue;
+        }
         let e = tau(
             vis,
             lo,
             hi,
-            grid.direction(c as u32),
+            d,
             settings.rays,
-            hash3(settings.seed, c as u32, grid.side()),
+            hash3(settings.seed, c, grid.side()),
         );
-        *v = e.tau;
+        out[c as usize] = e.tau;
         rays += e.rays as u64;
     }
     rays

@@ -81,3 +81,25 @@ fn a_table_that_cannot_meet_its_target_says_so() {
         "{table:?}"
     );
 }
+
+#[test]
+fn opposite_directions_share_one_estimate() {
+    use super::bake::bake_tau;
+    use super::grid::DirectionGrid;
+    let (leaves, lo, hi) = ball(40, 1.0, 0.4, Vec3::ZERO, 3);
+    let grid = DirectionGrid::new(6).unwrap();
+    let settings = TauSettings {
+        rays: 16,
+        ..TauSettings::default()
+    };
+    let mut out = vec![0.0f32; 36];
+    let rays = bake_tau(&leaves, lo, hi, grid, &settings, &mut out);
+    for c in 0..36 {
+        assert_eq!(
+            out[c as usize],
+            out[grid.cell_of(-grid.direction(c)) as usize]
+        );
+    }
+    // Half the cells estimated, each with at most 16 x 16 rays.
+    assert!(rays <= 18 * 256, "{rays} rays");
+}

@@ -170,3 +170,22 @@ fn interpolation_is_continuous_across_the_folded_border() {
         }
     }
 }
+
+#[test]
+fn the_opposite_of_a_centre_is_a_centre() {
+    // On grids of even side (an odd side puts centres at even multiples of 1 / side, whose
+    // fold `1 - |v|` is not one).
+    for side in (2..=32).step_by(2) {
+        let grid = DirectionGrid::new(side).unwrap();
+        for c in 0..grid.cells() {
+            let d = grid.direction(c);
+            let o = grid.cell_of(-d);
+            assert!(
+                (grid.direction(o) + d).length() < 1e-4,
+                "side {side}: cell {c} at {d}, its opposite {o} at {}",
+                grid.direction(o)
+            );
+            assert_eq!(grid.cell_of(-grid.direction(o)), c);
+        }
+    }
+}
