@@ -46,32 +46,11 @@ pub(crate) fn filter_corrections(st: &State, ws: &mut [u8], rays: u32) {
             if p.first_child == NONE {
                 continue;
             }
-            let (mut seen, mut area) = (0.0f64, 0.0f64);
-            let (mut sum, mut plain) = ([[0.0f64; 8]; 2], [[0.0f64; 8]; 2]);
-            for j in 0..4 {
-                let child = Elem::new(kind, p.first_child + j);
-                let cp = st.patch(ws, child);
-                let (a, w) = (cp.area as f64, (cp.area * cp.exposed) as f64);
-                area += a;
-                seen += w;
-                for side in 0..sides {
-                    if let Some(c) = st.correction(ws, child, side) {
-                        for b in 0..nb {
-                            sum[side][b] += w * c[b] as f64;
-                            plain[side][b] += a * c[b] as f64;
-                        }
-                    }
-                }
-            }
-            let (means, total) = if seen > 0.0 {
-                (sum, seen)
-            } else {
-                (plain, area)
-            };
-            for (side, m) in means.iter().enumerate().take(sides) {
+            for side in 0..sides {
+                let m = children_mean(st, ws, kind, p.first_child, side);
                 if let Some(c) = st.correction_mut(ws, e, side) {
-                    for (v, s) in c.iter_mut().zip(m) {
-                        *v = if total > 0.0 { (s / total) as f32 } else { 0.0 };
+                    for (v, m) in c.iter_mut().zip(m) {
+                        *v = m as f32;
                     }
                 }
             }
@@ -96,33 +75,11 @@ pub(crate) fn filter_corrections(st: &State, ws: &mut [u8], rays: u32) {
             let n = smallest * per_area;
             let keep = n / (n + MIN_RAYS);
             for side in 0..sides {
-                let (mut value, mut mean) = ([0.0f32; 8], [0.0f64; 8]);
+                let mut value = [0.0f32; 8];
                 if let Some(c) = st.correction(ws, e, side) {
                     value[..nb].copy_from_slice(c);
                 }
-                let (mut seen, mut area) = (0.0f64, 0.0f64);
-                let mut plain = [0.0f64; 8];
-                for j in 0..4 {
-                    let child = Elem::new(kind, p.first_child + j);
-                    let cp = st.patch(ws, child);
-                    let (a, w) = (cp.area as f64, (cp.area * cp.exposed) as f64);
-                    area += a;
-                    seen += w;
-                    if let Some(c) = st.correction(ws, child, side) {
-                        for b in 0..nb {
-                            mean[b] += w * c[b] as f64;
-                            plain[b] += a * c[b] as f64;
-                        }
-                    }
-                }
-                let (sum, total) = if seen > 0.0 {
-                    (mean, seen)
-                } else {
-                    (plain, area)
-                };
-                for b in 0..nb {
-                    mean[b] = if total > 0.0 { sum[b] / total } else { 0.0 };
-                }
+                let mean = children_mean(st, ws, kind, p.first_child, side);
                 for j in 0..4 {
                     let child = Elem::new(kind, p.first_child + j);
                     // A leaf's irradiance without its correction: what the shrunk
@@ -158,4 +115,36 @@ pub(crate) fn filter_corrections(st: &State, ws: &mut [u8], rays: u32) {
             }
         }
     }
+}
+
+/// The mean correction (per band) of side `side` over the 4 children from `first` of a
+/// patch in pool `kind`, weighted by exposed area (by plain area where all are buried).
+fn children_mean(st: &State, ws: &[u8], kind: Kind, first: u32, side: usize) -> [f64; 8] {
+    let (mut seen, mut area) = (0.0f64, 0.0f64);
+    let (mut sum, mut plain) = ([0.0f64; 8], [0.0f64; 8]);
+    for j in 0..4 {
+        let child = Elem::new(kind, first + j);
+        let cp = st.patch(ws, child);
+        let (a, w) = (cp.area as f64, (cp.area * cp.exposed) as f64);
+        area += a;
+        seen += w;
+        if let Some(c) = st.correction(ws, child, side) {
+            for (b, v) in c.iter().enumerate() {
+                sum[b] += w * *v as f64;
+                plain[b] += a * *v as f64;
+            }
+        }
+    }
+    let (sum, total) = if seen > 0.0 {
+        (sum, seen)
+    } else {
+        (plain, area)
+    };
+    let mut mean = [0.0f64; 8];
+    if total > 0.0 {
+        for (m, s) in mean.iter_mut().zip(sum) {
+            *m = s / total;
+        }
+    }
+    mean
 }
