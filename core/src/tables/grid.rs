@@ -73,21 +73,83 @@ impl DirectionGrid {
         )
     }
 
-    /// The four cells whose centres surround `d` and their bilinear weights (summing to 1),
-    /// across the square's folded border where `d` lies near it.
+    /// The cells whose centres surround `d` and their weights (summing to 1, at most three
+    /// non-zero), across the square's folded border where `d` lies near it.
+    ///
+    /// `d` is interpolated linearly on a triangle of cell centres that holds it, with its
+    /// barycentric coordinates in the triangle of the centres as 3D vectors (the gnomonic
+    /// projection, where arcs between centres are straight): second order everywhere and
+    /// exact at the centres. Bilinear weights on the square would be first order only where
+    /// the map creases (the equator and the planes x = 0, y = 0), whose derivative jumps
+    /// there: there the four centres around `d` on the square need not even surround it on
+    /// the sphere (5.6% worst error at side 16 on a function ranging over 1.4, against 2.9%).
     pub fn weights(&self, d: Vec3) -> [(u32, f32); 4] {
+        let at = |i: i64, j: i64| self.wrapped(i, j);
+        // The triangle that holds d on the sphere, of the fan around the centre of its own
+        // cell and the eight cells about it (which covers the cell on the sphere, even
+        // where the map creases and the four centres of the bilinear stencil do not).
+        let d = d.normalize_or_zero();
+        let own = self.cell_of(d);
+        let (ci, cj) = ((own % self.side) as i64, (own / self.side) as i64);
+        let ring = [
+            at(ci + 1, cj),
+            at(ci + 1, cj + 1),
+            at(ci, cj + 1),
+            at(ci - 1, cj + 1),
+            at(ci - 1, cj),
+            at(ci - 1, cj - 1),
+            at(ci, cj - 1),
+            at(ci + 1, cj - 1),
+        ];
+        let mut best: Option<([u32; 3], [f32; 3], f32)> = None;
+        for k in 0..8 {
+            let cells = [own, ring[k], ring[(k + 1) % 8]];
+            let Some(l) = barycentric(
+                [
+                    self.direction(cells[0]),
+                    self.direction(cells[1]),
+                    self.direction(cells[2]),
+                ],
+                d,
+            ) else {
+                continue;
+            };
+            let low = l[0].min(l[1]).min(l[2]);
+            if best.is_none_or(|b| low > b.2 + 1e-6) {
+                best = Some((cells, l, low));
+            }
+            if low >= -1e-6 {
+                break;
+            }
+        }
+        match best {
+            Some((cells, l, _)) => {
+                let l = clamp(l);
+                [
+                    (cells[0], l[0]),
+                    (cells[1], l[1]),
+                    (cells[2], l[2]),
+                    (cells[2], 0.0),
+                ]
+            }
+            None => self.bilinear(d),
+        }
+    }
+
+    /// Bilinear weights of the four centres around `d` on the square (for the degenerate
+    /// triangles at the square's corners).
+    fn bilinear(&self, d: Vec3) -> [(u32, f32); 4] {
         let (u, v) = sphere_to_square(d);
         let n = self.side as f32;
         let (s, t) = ((u + 1.0) * 0.5 * n - 0.5, (v + 1.0) * 0.5 * n - 0.5);
         let (s0, t0) = (libm::floorf(s), libm::floorf(t));
         let (fs, ft) = (s - s0, t - t0);
         let (i0, j0) = (s0 as i64, t0 as i64);
-        let at = |i: i64, j: i64| self.wrapped(i, j);
         [
-            (at(i0, j0), (1.0 - fs) * (1.0 - ft)),
-            (at(i0 + 1, j0), fs * (1.0 - ft)),
-            (at(i0, j0 + 1), (1.0 - fs) * ft),
-            (at(i0 + 1, j0 + 1), fs * ft),
+            (self.wrapped(i0, j0), (1.0 - fs) * (1.0 - ft)),
+            (self.wrapped(i0 + 1, j0), fs * (1.0 - ft)),
+            (self.wrapped(i0, j0 + 1), (1.0 - fs) * ft),
+            (self.wrapped(i0 + 1, j0 + 1), fs * ft),
         ]
     }
 
@@ -112,6 +174,39 @@ impl DirectionGrid {
             j = n - 1 - j;
         }
         (j.clamp(0, n - 1) * n + i.clamp(0, n - 1)) as u32
+    }
+}
+
+/// The barycentric coordinates of the direction `d` in the spherical triangle of the unit
+/// vectors `c` (gnomonic: `d` along `l0 c0 + l1 c1 + l2 c2`, `l` summing to 1; negative
+/// outside the triangle); `None` when the triangle is degenerate (two centres the same, at
+/// the square's corners) or `d` is not on its side of the sphere.
+fn barycentric(c: [Vec3; 3], d: Vec3) -> Option<[f32; 3]> {
+    let det = c[0].dot(c[1].cross(c[2]));
+    if libm::fabsf(det) < 1e-9 {
+        return None;
+    }
+    // Cramer's rule for [c0 c1 c2] l = d.
+    let l = [
+        d.dot(c[1].cross(c[2])) / det,
+        c[0].dot(d.cross(c[2])) / det,
+        c[0].dot(c[1].cross(d)) / det,
+    ];
+    let sum = l[0] + l[1] + l[2];
+    if !(sum > 0.0) || !sum.is_finite() {
+        return None;
+    }
+    Some([l[0] / sum, l[1] / sum, l[2] / sum])
+}
+
+/// Barycentric weights with negative ones clamped to 0 and the rest renormalised.
+fn clamp(l: [f32; 3]) -> [f32; 3] {
+    let l = [l[0].max(0.0), l[1].max(0.0), l[2].max(0.0)];
+    let sum = l[0] + l[1] + l[2];
+    if sum > 0.0 {
+        [l[0] / sum, l[1] / sum, l[2] / sum]
+    } else {
+        [1.0, 0.0, 0.0]
     }
 }
 

@@ -1,10 +1,12 @@
 //! Directional tables of originals: what a closed instance knows about its contents as
-//! functions of direction (issue 17). So far the direction grid they are sampled on, the
-//! box's projected area, the uncollided transmittance and its table baked to an error
-//! target.
+//! functions of direction (issue 17). The direction grid they are sampled on, the box's
+//! projected area, the uncollided transmittance and its table baked to an error target, the
+//! light leaving a box towards a direction, and the phase table.
 
 pub mod bake;
 pub mod grid;
+pub mod outgoing;
+pub mod phase;
 pub mod tau;
 
 #[cfg(test)]

@@ -41,9 +41,43 @@ pub fn tau<V: Visibility + ?Sized>(
     g: u32,
     seed: u32,
 ) -> TauEstimate {
+    let mut clear = 0u32;
+    let (crossed, cell) = parallel_rays(lo, hi, d, g, seed, |from, to| {
+        if vis.transmittance(from, to, [NONE, NONE]) > 0.5 {
+            clear += 1;
+        }
+    });
+    if g == 0 || d.normalize_or_zero() == Vec3::ZERO {
+        return TauEstimate::default();
+    }
+    TauEstimate {
+        tau: if crossed > 0 {
+            clear as f32 / crossed as f32
+        } else {
+            1.0
+        },
+        rays: crossed,
+        area: crossed as f32 * cell,
+    }
+}
+
+/// Calls `f(from, to)` for each ray of a stratified `g x g` grid of rays parallel to the
+/// unit direction `d` (jittered by `seed`) over the rectangle that bounds the projection of
+/// the box `[lo, hi]`, with the part of the ray inside the box (`from` where it enters, `to`
+/// where it leaves, `to - from` along `d`); rays that miss the box are skipped. Returns the
+/// rays that crossed and the area each ray stands for (m^2): `crossed x area` estimates
+/// [`projected_area`].
+pub fn parallel_rays<F: FnMut(Vec3, Vec3)>(
+    lo: Vec3,
+    hi: Vec3,
+    d: Vec3,
+    g: u32,
+    seed: u32,
+    mut f: F,
+) -> (u32, f32) {
     let d = d.normalize_or_zero();
     if d == Vec3::ZERO || g == 0 {
-        return TauEstimate::default();
+        return (0, 0.0);
     }
     let (e1, e2) = frame(d);
     let centre = (lo + hi) * 0.5;
@@ -59,8 +93,12 @@ pub fn tau<V: Visibility + ?Sized>(
         t_max = t_max.max(c.dot(e2).abs());
     }
     let reach = (hi - lo).length();
+    // Rays run through the box grown by a hair, so that polygons on its faces (all of them,
+    // for a flat original) are inside the segments rather than at their ends.
+    let pad = Vec3::splat(1e-4 * reach + f32::MIN_POSITIVE);
+    let (lo, hi) = (lo - pad, hi + pad);
     let cell = 4.0 * s_max * t_max / (g * g) as f32;
-    let (mut crossed, mut clear) = (0u32, 0u32);
+    let mut crossed = 0u32;
     for j in 0..g {
         for i in 0..g {
             let (ju, jv) = unit2(hash3(seed, j * g + i, 0x7A0));
@@ -74,22 +112,10 @@ pub fn tau<V: Visibility + ?Sized>(
                 continue;
             }
             crossed += 1;
-            let from = on - d * reach + d * t0;
-            let to = on - d * reach + d * t1;
-            if vis.transmittance(from, to, [NONE, NONE]) > 0.5 {
-                clear += 1;
-            }
+            f(on - d * reach + d * t0, on - d * reach + d * t1);
         }
     }
-    TauEstimate {
-        tau: if crossed > 0 {
-            clear as f32 / crossed as f32
-        } else {
-            1.0
-        },
-        rays: crossed,
-        area: crossed as f32 * cell,
-    }
+    (crossed, cell)
 }
 
 /// Two unit vectors that make a right-handed orthonormal frame with the unit `d`.
