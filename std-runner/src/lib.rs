@@ -14,5 +14,6 @@ pub mod output;
 pub mod paths;
 pub mod scene;
 pub mod solve;
+pub mod tables;
 pub mod text;
 pub mod visibility;

@@ -3,7 +3,7 @@
 //! grid (issue 17: "resolution chosen per original by an error target").
 
 use super::grid::{DirectionGrid, MAX_SIDE};
-use super::tau::tau;
+use super::tau::{interpolate_tau, tau};
 use crate::sampling::{hash3, unit2};
 use crate::visibility::Visibility;
 use glam::Vec3;
@@ -125,7 +125,7 @@ pub fn check_tau<V: Visibility + ?Sized>(
             hash3(settings.seed, k, 0xC4ED),
         );
         rays += e.rays as u64;
-        worst = worst.max((grid.interpolate(values, d) - e.tau).abs());
+        worst = worst.max((interpolate_tau(&grid, values, lo, hi, d) - e.tau).abs());
     }
     (worst, rays)
 }

@@ -193,7 +193,7 @@ fn barycentric(c: [Vec3; 3], d: Vec3) -> Option<[f32; 3]> {
         c[0].dot(c[1].cross(d)) / det,
     ];
     let sum = l[0] + l[1] + l[2];
-    if !(sum > 0.0) || !sum.is_finite() {
+    if sum <= 0.0 || !sum.is_finite() {
         return None;
     }
     Some([l[0] / sum, l[1] / sum, l[2] / sum])

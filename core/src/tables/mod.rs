@@ -4,6 +4,7 @@
 //! light leaving a box towards a direction, and the phase table.
 
 pub mod bake;
+pub mod directional;
 pub mod grid;
 pub mod outgoing;
 pub mod phase;
@@ -13,5 +14,7 @@ pub mod tau;
 mod tests_bake;
 #[cfg(test)]
 mod tests_grid;
+#[cfg(test)]
+mod tests_phase;
 #[cfg(test)]
 mod tests_tau;

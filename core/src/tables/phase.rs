@@ -1,11 +1,17 @@
-//! An original's phase table (paper section 3.1, DESIGN.md "Directional table"): the light
-//! its contents scatter out of the box for light that comes in, per unit irradiance, as
-//! functions of the incoming direction (the uniform form, the paper's) and of the incoming
-//! and the outgoing directions (the bidirectional form). Directions are unit vectors in the
-//! original's frame: incoming ones point towards the source (as a sun's `towards`), outgoing
-//! ones towards the observer.
+//! An original's phase table (paper section 3.1, DESIGN.md "Directional table"): what its
+//! contents scatter out of the box for the light they intercept, as functions of the
+//! incoming direction (the albedo: the uniform form, the paper's) and of the incoming and
+//! outgoing directions (the response: the bidirectional form).
+//!
+//! Both are per unit of intercepted power (and the response per unit of the cross-section
+//! seen), so that they are smooth in the directions: how much a sun's light the contents intercept changes sharply (a maize plant's
+//! leaves stand in one plane, and a sun in that plane meets their edges), and that is the
+//! `tau` table's business (the cross-section `(1 - tau) A`), measured by rays alone on a grid
+//! as fine as it needs. Directions are unit vectors in the original's frame: incoming ones
+//! point towards the source (as a sun's `towards`), outgoing ones towards the observer.
 
 use super::grid::DirectionGrid;
+use crate::limits::MAX_BANDS;
 use glam::Vec3;
 
 /// A phase table over caller storage.
@@ -17,18 +23,21 @@ pub struct PhaseTable<'a> {
     outgoing: DirectionGrid,
     /// Bands, 1..=MAX_BANDS.
     bands: usize,
-    /// `[cell_in * bands + band]`: the fraction of the power the box intercepts from a sun
-    /// in that cell (irradiance x projected area `A(dir)`) that leaves it scattered, 0..=1.
-    scattered: &'a [f32],
-    /// `[(cell_in * out_cells + cell_out) * bands + band]`: the radiant intensity (W/sr) that
-    /// leaves the box towards the outgoing cell for a sun of 1 W/m^2 in the incoming cell:
-    /// m^2/sr.
-    intensity: &'a [f32],
+    /// `[cell_in * bands + band]`: of the power the contents intercept from a sun in that
+    /// cell, the fraction that leaves the box scattered, 0..=1.
+    albedo: &'a [f32],
+    /// `[(cell_in * out_cells + cell_out) * bands + band]`: the radiant intensity (W/sr)
+    /// that leaves the box towards the outgoing cell per watt intercepted from a sun in the
+    /// incoming cell and per m^2 of the contents' cross-section seen from the outgoing cell:
+    /// the mean radiance of what an observer there sees, per watt intercepted
+    /// (1/(m^2 sr)). Per unit cross-section for the same reason as the albedo: how much of
+    /// the contents an observer sees changes sharply with the direction.
+    response: &'a [f32],
 }
 
-/// Why storage is not a phase table.
+/// Why storage is not a table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PhaseError {
+pub enum TableError {
     /// No band, or more than the core holds.
     Bands,
     /// A slice's length is not what the grids and bands make.
@@ -38,51 +47,54 @@ pub enum PhaseError {
         /// Values given.
         given: u64,
     },
-    /// A value is not finite or is negative (or, for a fraction, above 1 by more than
-    /// rounding).
+    /// A value is not finite or is out of its range (a fraction outside 0..=1 by more than
+    /// rounding, a negative intensity).
     Value {
         /// Index of the first bad value in its slice.
         index: u64,
     },
+    /// The box is not finite or its corners are not ordered.
+    Box,
+}
+
+/// Checks `values` against its expected length and its range `[0, max]`.
+pub(super) fn check_values(values: &[f32], expected: u64, max: f32) -> Result<(), TableError> {
+    if values.len() as u64 != expected {
+        return Err(TableError::Length {
+            expected,
+            given: values.len() as u64,
+        });
+    }
+    match values
+        .iter()
+        .position(|v| !v.is_finite() || *v < 0.0 || *v > max)
+    {
+        Some(i) => Err(TableError::Value { index: i as u64 }),
+        None => Ok(()),
+    }
 }
 
 impl<'a> PhaseTable<'a> {
-    /// Checks the lengths and values of `scattered` and `intensity` against the grids.
+    /// Checks the lengths and values of `albedo` and `response` against the grids.
     pub fn new(
         incoming: DirectionGrid,
         outgoing: DirectionGrid,
         bands: usize,
-        scattered: &'a [f32],
-        intensity: &'a [f32],
-    ) -> Result<Self, PhaseError> {
-        if bands == 0 || bands > crate::limits::MAX_BANDS {
-            return Err(PhaseError::Bands);
+        albedo: &'a [f32],
+        response: &'a [f32],
+    ) -> Result<Self, TableError> {
+        if bands == 0 || bands > MAX_BANDS {
+            return Err(TableError::Bands);
         }
         let n_in = incoming.cells() as u64 * bands as u64;
-        let n_bi = n_in * outgoing.cells() as u64;
-        for (expected, s) in [(n_in, scattered), (n_bi, intensity)] {
-            if s.len() as u64 != expected {
-                return Err(PhaseError::Length {
-                    expected,
-                    given: s.len() as u64,
-                });
-            }
-        }
-        if let Some(i) = scattered
-            .iter()
-            .position(|v| !v.is_finite() || *v < 0.0 || *v > 1.0 + 1e-3)
-        {
-            return Err(PhaseError::Value { index: i as u64 });
-        }
-        if let Some(i) = intensity.iter().position(|v| !v.is_finite() || *v < 0.0) {
-            return Err(PhaseError::Value { index: i as u64 });
-        }
+        check_values(albedo, n_in, 1.0 + 1e-3)?;
+        check_values(response, n_in * outgoing.cells() as u64, f32::MAX)?;
         Ok(Self {
             incoming,
             outgoing,
             bands,
-            scattered,
-            intensity,
+            albedo,
+            response,
         })
     }
 
@@ -101,37 +113,39 @@ impl<'a> PhaseTable<'a> {
         self.bands
     }
 
-    /// The scattered fraction of band `band` for a sun towards `source`, interpolated.
-    pub fn scattered(&self, source: Vec3, band: usize) -> f32 {
+    /// The albedo of band `band` for a sun towards `source`, interpolated.
+    pub fn albedo(&self, source: Vec3, band: usize) -> f32 {
         self.incoming
             .weights(source)
             .iter()
-            .map(|&(c, w)| w * self.scattered[c as usize * self.bands + band])
+            .map(|&(c, w)| w * self.albedo_at(c, band))
             .sum()
     }
 
-    /// The intensity (m^2/sr: W/sr per W/m^2) of band `band` towards `observer` for a sun
-    /// towards `source`, interpolated bilinearly in both directions.
-    pub fn intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
+    /// The response (1/(m^2 sr)) of band `band` towards `observer` for a sun towards `source`,
+    /// interpolated linearly in both directions.
+    pub fn response(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
         let out = self.outgoing.weights(observer);
-        let cells = self.outgoing.cells() as usize;
         let mut sum = 0.0;
         for &(ci, wi) in &self.incoming.weights(source) {
+            if wi == 0.0 {
+                continue;
+            }
             for &(co, wo) in &out {
-                sum += wi * wo * self.intensity[(ci as usize * cells + co as usize) * self.bands + band];
+                sum += wi * wo * self.response_at(ci, co, band);
             }
         }
         sum
     }
 
-    /// The table's scattered fraction at incoming cell `cell` (no interpolation).
-    pub fn scattered_at(&self, cell: u32, band: usize) -> f32 {
-        self.scattered[cell as usize * self.bands + band]
+    /// The albedo at incoming cell `cell` (no interpolation).
+    pub fn albedo_at(&self, cell: u32, band: usize) -> f32 {
+        self.albedo[cell as usize * self.bands + band]
     }
 
-    /// The table's intensity at incoming cell `cell_in`, outgoing cell `cell_out`.
-    pub fn intensity_at(&self, cell_in: u32, cell_out: u32, band: usize) -> f32 {
-        self.intensity
-            [(cell_in as usize * self.outgoing.cells() as usize + cell_out as usize) * self.bands + band]
+    /// The response at incoming cell `cell_in`, outgoing cell `cell_out`.
+    pub fn response_at(&self, cell_in: u32, cell_out: u32, band: usize) -> f32 {
+        let cells = self.outgoing.cells() as usize;
+        self.response[(cell_in as usize * cells + cell_out as usize) * self.bands + band]
     }
 }

@@ -3,6 +3,7 @@
 //! transmittance `tau(dir)` (dimensionless, 0..=1): the fraction of parallel rays along
 //! `dir` across the box's projection that cross the box without meeting a polygon.
 
+use super::grid::DirectionGrid;
 use crate::limits::NONE;
 use crate::sampling::{hash3, unit2};
 use crate::visibility::Visibility;
@@ -15,6 +16,28 @@ pub fn projected_area(lo: Vec3, hi: Vec3, d: Vec3) -> f32 {
     let s = (hi - lo).max(Vec3::ZERO);
     let a = d.abs();
     a.x * s.y * s.z + a.y * s.x * s.z + a.z * s.x * s.y
+}
+
+/// `tau` towards `d` from its values at the cell centres of `grid`, for the box `[lo, hi]`.
+///
+/// What is interpolated is the cross-section `(1 - tau) A` (m^2), the area of the contents'
+/// own shadow, not `tau`: `A` folds wherever the direction crosses the plane of a face of the
+/// box (its cosine weights change sign), and `tau = 1 - cross-section / A` folds with it,
+/// which interpolation would only follow to first order.
+pub fn interpolate_tau(grid: &DirectionGrid, values: &[f32], lo: Vec3, hi: Vec3, d: Vec3) -> f32 {
+    let area = projected_area(lo, hi, d);
+    if area <= 0.0 {
+        return 1.0;
+    }
+    let shadow: f32 = grid
+        .weights(d)
+        .iter()
+        .map(|&(c, w)| {
+            let t = values.get(c as usize).copied().unwrap_or(1.0);
+            w * (1.0 - t) * projected_area(lo, hi, grid.direction(c))
+        })
+        .sum();
+    (1.0 - shadow / area).clamp(0.0, 1.0)
 }
 
 /// One estimate of `tau` along a direction.

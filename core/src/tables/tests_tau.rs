@@ -27,16 +27,34 @@ fn meets(from: Vec3, to: Vec3, a: Vec3, b: Vec3, c: Vec3) -> bool {
     u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0
 }
 
-impl Visibility for Leaves {
-    fn transmittance(&self, from: Vec3, to: Vec3, _: [u32; 2]) -> f32 {
-        let hit = self
-            .0
-            .iter()
-            .any(|q| meets(from, to, q[0], q[1], q[2]) || meets(from, to, q[0], q[2], q[3]));
-        if hit { 0.0 } else { 1.0 }
+impl Leaves {
+    /// The leaves the segment meets (not those in `skip`), with the parameter where.
+    fn hits(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> impl Iterator<Item = (u32, f32)> + '_ {
+        self.0.iter().enumerate().filter_map(move |(i, q)| {
+            if skip.contains(&(i as u32)) {
+                return None;
+            }
+            if !(meets(from, to, q[0], q[1], q[2]) || meets(from, to, q[0], q[2], q[3])) {
+                return None;
+            }
+            let n = (q[1] - q[0]).cross(q[2] - q[0]);
+            let t = n.dot(q[0] - from) / n.dot(to - from);
+            Some((i as u32, t))
+        })
     }
-    fn first_hit(&self, _: Vec3, _: Vec3, _: [u32; 2]) -> Option<(u32, f32)> {
-        unreachable!("tau asks only for transmittance")
+}
+
+impl Visibility for Leaves {
+    fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
+        if self.hits(from, to, skip).next().is_some() {
+            0.0
+        } else {
+            1.0
+        }
+    }
+    fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
+        self.hits(from, to, skip)
+            .min_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(core::cmp::Ordering::Equal))
     }
 }
 

@@ -6,6 +6,7 @@ mod flatten;
 mod info;
 mod progress;
 mod solve;
+mod tables;
 mod verdict;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -58,6 +59,12 @@ pub enum Command {
     /// Radiosity in W/m^2 by hierarchical radiosity (default) or the exact full-matrix
     /// solver; optionally the error against a reference results table.
     Solve(solve::Args),
+    /// Compute the directional tables of every instanced original: tau, projected area and
+    /// phase function
+    ///
+    /// Each original is solved alone under suns from a grid of directions; the tables are
+    /// what a closed instance knows of its contents (--method hi).
+    Tables(tables::Args),
     /// Generate a procedural scene: poplar, stand, room, forest, canopy
     Gen(crate::generate::Args),
 }
@@ -72,6 +79,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Convert(a) => convert::run(a),
         Command::Flatten(a) => flatten::run(a),
         Command::Solve(a) => solve::run(a),
+        Command::Tables(a) => tables::run(a),
         Command::Gen(a) => crate::generate::run(a),
     }
 }

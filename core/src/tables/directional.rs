@@ -1,0 +1,115 @@
+//! All the tables of one original together: what a closed instance of it does with light
+//! (DESIGN.md "Instances inside a level"): it blocks by `tau`, intercepts by the
+//! cross-section `(1 - tau) A`, and sends out the scattered part of what it intercepts,
+//! either spread by the uniform form (the paper's) or by the bidirectional response.
+//! Units: m^2 for areas and powers per unit irradiance (W per W/m^2), m^2/sr for intensities
+//! per unit irradiance.
+
+use super::grid::DirectionGrid;
+use super::phase::{PhaseTable, TableError, check_values};
+use super::tau::{interpolate_tau, projected_area};
+use glam::Vec3;
+
+/// An original's `tau` and phase tables, over caller storage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectionalTables<'a> {
+    /// The original's box in its own frame (m).
+    lo: Vec3,
+    /// Upper corner.
+    hi: Vec3,
+    /// Grid of `tau`.
+    tau_grid: DirectionGrid,
+    /// `tau` per cell (0..=1).
+    tau: &'a [f32],
+    /// The phase table.
+    phase: PhaseTable<'a>,
+    /// The cross-section integrated over the sphere (m^2 sr): the uniform form's spread.
+    shadow_integral: f32,
+}
+
+impl<'a> DirectionalTables<'a> {
+    /// Checks the box and `tau` and puts them together with the phase table.
+    pub fn new(
+        lo: Vec3,
+        hi: Vec3,
+        tau_grid: DirectionGrid,
+        tau: &'a [f32],
+        phase: PhaseTable<'a>,
+    ) -> Result<Self, TableError> {
+        if !lo.is_finite() || !hi.is_finite() || lo.cmpgt(hi).any() {
+            return Err(TableError::Box);
+        }
+        check_values(tau, tau_grid.cells() as u64, 1.0)?;
+        let shadow_integral = (0..tau_grid.cells())
+            .map(|c| {
+                let d = tau_grid.direction(c);
+                (1.0 - tau[c as usize]) * projected_area(lo, hi, d)
+            })
+            .sum::<f32>()
+            * tau_grid.solid_angle();
+        Ok(Self {
+            lo,
+            hi,
+            tau_grid,
+            tau,
+            phase,
+            shadow_integral,
+        })
+    }
+
+    /// The box (m).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (self.lo, self.hi)
+    }
+
+    /// The grid of `tau`.
+    pub fn tau_grid(&self) -> DirectionGrid {
+        self.tau_grid
+    }
+
+    /// `tau` at the cell centres.
+    pub fn tau_values(&self) -> &'a [f32] {
+        self.tau
+    }
+
+    /// The phase table.
+    pub fn phase(&self) -> PhaseTable<'a> {
+        self.phase
+    }
+
+    /// The box's projected area along `d` (m^2).
+    pub fn area(&self, d: Vec3) -> f32 {
+        projected_area(self.lo, self.hi, d)
+    }
+
+    /// Uncollided transmittance along `d`, interpolated (0..=1).
+    pub fn tau(&self, d: Vec3) -> f32 {
+        interpolate_tau(&self.tau_grid, self.tau, self.lo, self.hi, d)
+    }
+
+    /// The cross-section along `d`: the area of the contents' shadow, `(1 - tau) A` (m^2).
+    pub fn shadow(&self, d: Vec3) -> f32 {
+        (1.0 - self.tau(d)) * self.area(d)
+    }
+
+    /// Power scattered out of the box in band `band` for a sun of 1 W/m^2 towards `source`
+    /// (m^2).
+    pub fn scattered(&self, source: Vec3, band: usize) -> f32 {
+        self.phase.albedo(source, band) * self.shadow(source)
+    }
+
+    /// Intensity leaving the box towards `observer` in band `band` for a sun of 1 W/m^2
+    /// towards `source` (m^2/sr), by the bidirectional response.
+    pub fn intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
+        self.phase.response(source, observer, band) * self.shadow(source) * self.shadow(observer)
+    }
+
+    /// The same by the uniform form: the scattered power leaves as if from a surface of
+    /// uniform radiance whose area seen from `observer` is the cross-section there.
+    pub fn uniform_intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
+        if self.shadow_integral <= 0.0 {
+            return 0.0;
+        }
+        self.scattered(source, band) * self.shadow(observer) / self.shadow_integral
+    }
+}

@@ -1,0 +1,109 @@
+//! Directional tables of originals (issue 17, paper sections 3.1 and 4): for each original
+//! that instances share, `tau(dir)`, the box's projected area `A(dir)` and the phase table,
+//! measured on the original alone, expanded, in its own frame.
+//!
+//! Units: directions are unit vectors in the original's frame (incoming ones towards the
+//! source, outgoing ones towards the observer); areas m^2; intensities m^2/sr (W/sr per W/m^2
+//! of sun); fractions of the power the box intercepts (sun irradiance x `A(dir)`).
+
+mod bake;
+mod original;
+mod sample;
+
+pub use bake::{TableSettings, bake_original, uniform_direction};
+pub use original::{Alone, Lit};
+pub use sample::{Sample, sample_at};
+
+use glam::Vec3;
+use hirad_core::tables::directional::DirectionalTables;
+use hirad_core::tables::grid::DirectionGrid;
+use hirad_core::tables::phase::PhaseTable;
+
+/// The tables of one original and what was measured making them.
+#[derive(Clone, Debug)]
+pub struct OriginalTables {
+    /// The original's name.
+    pub name: String,
+    /// Its index in the scene's originals.
+    pub index: usize,
+    /// Polygons of the original expanded.
+    pub polygons: usize,
+    /// Bands.
+    pub bands: usize,
+    /// Its bounding box in its own frame (m).
+    pub lo: Vec3,
+    /// Upper corner.
+    pub hi: Vec3,
+    /// Grid of `tau`.
+    pub tau_grid: DirectionGrid,
+    /// `tau` per cell of `tau_grid` (dimensionless, 0..=1).
+    pub tau: Vec<f32>,
+    /// Largest error of the interpolated cross-section `(1 - tau) A` at the bake's check
+    /// directions, relative to it (or to 5% of `A` where the contents cast less).
+    pub tau_error: f32,
+    /// Grid of incoming directions of the phase table.
+    pub incoming: DirectionGrid,
+    /// Grid of outgoing directions of the bidirectional phase table.
+    pub outgoing: DirectionGrid,
+    /// Per incoming cell and band: the albedo (see [`PhaseTable`]).
+    pub albedo: Vec<f32>,
+    /// Per incoming cell, outgoing cell and band: the response (1/(m^2 sr)).
+    pub response: Vec<f32>,
+    /// Per incoming cell and band: the absorbed fraction.
+    pub absorbed: Vec<f32>,
+    /// Per incoming cell and band: what enters minus what is absorbed, scattered out (the
+    /// table's intensity summed over the sphere) and transmitted uncollided, over what enters.
+    pub residual: Vec<f32>,
+    /// Largest relative error of the interpolated scattered fraction at the check
+    /// directions (relative to the measured fraction, or to 0.01 when smaller).
+    pub scattered_error: f32,
+    /// Largest error of the interpolated intensity at the check directions, relative to the
+    /// measured intensity or, when it is darker, to the mean over all directions.
+    pub intensity_error: f32,
+    /// Incoming grids tried: side, scattered error, intensity error.
+    pub tried: Vec<(u32, f32, f32)>,
+    /// Outgoing grids tried: side, intensity error at the check suns' own light.
+    pub out_tried: Vec<(u32, f32)>,
+    /// True when every error met its target (false: a grid reached its largest side first).
+    pub met: bool,
+    /// hr solves made (grids and checks).
+    pub solves: u32,
+    /// Rays cast for `tau` and the outgoing light.
+    pub rays: u64,
+    /// Seconds spent.
+    pub seconds: f64,
+}
+
+impl OriginalTables {
+    /// The tables as the core reads them.
+    pub fn view(&self) -> DirectionalTables<'_> {
+        let phase = PhaseTable::new(
+            self.incoming,
+            self.outgoing,
+            self.bands,
+            &self.albedo,
+            &self.response,
+        )
+        .expect("a baked phase table is consistent");
+        DirectionalTables::new(self.lo, self.hi, self.tau_grid, &self.tau, phase)
+            .expect("baked tables are consistent")
+    }
+
+    /// Bytes of the tables' values (f32 each).
+    pub fn bytes(&self) -> u64 {
+        4 * (self.tau.len() + self.albedo.len() + self.response.len()) as u64
+    }
+
+    /// Largest |residual| over the incoming cells, per band.
+    pub fn worst_residual(&self) -> Vec<f32> {
+        (0..self.bands)
+            .map(|b| {
+                self.residual
+                    .iter()
+                    .skip(b)
+                    .step_by(self.bands)
+                    .fold(0.0f32, |m, r| m.max(r.abs()))
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,216 @@
+//! One original taken out of its scene to be measured: its expanded geometry in its own
+//! frame, a ray caster over it, and hr solves of it alone under a sun of 1 W/m^2.
+
+use crate::output::ResultsTable;
+use crate::scene::{self, Scene};
+use crate::solve::{RayonExecutor, world_polygons};
+use crate::visibility::ObvhsVisibility;
+use anyhow::{Result, anyhow};
+use glam::Vec3;
+use hirad_core::hr::{self, NoProgress, Settings, SolveError, Stats};
+use hirad_core::limits::MAX_BANDS;
+use hirad_core::tables::outgoing::visible_fraction;
+
+/// An original alone, expanded, in its own frame (metres).
+pub struct Alone {
+    /// The scene that holds only the original (its root as the scene's root), no lights.
+    pub scene: Scene,
+    /// World corners of every polygon, in global-id order of `scene`.
+    pub polygons: Vec<Vec<Vec3>>,
+    /// Unit front normal per polygon.
+    pub normals: Vec<Vec3>,
+    /// Area per polygon (m^2).
+    pub areas: Vec<f32>,
+    /// The bounding box of the polygons (m).
+    pub lo: Vec3,
+    /// Upper corner.
+    pub hi: Vec3,
+    /// Rays against the polygons.
+    pub vis: ObvhsVisibility,
+}
+
+/// A solve of an original under one sun.
+pub struct Lit {
+    /// Per polygon: radiosity and irradiance, front and back (W/m^2 per W/m^2 of sun).
+    pub table: ResultsTable,
+    /// The solver's statistics (its power balance: direct, absorbed, escaped).
+    pub stats: Stats,
+}
+
+impl Alone {
+    /// Takes original `index` of `scene` out: its tree with every instance inside expanded.
+    pub fn new(scene: &Scene, index: usize) -> Result<Self> {
+        let o = scene
+            .originals
+            .get(index)
+            .ok_or_else(|| anyhow!("no original {index}"))?;
+        let alone = Scene {
+            bands: scene.bands,
+            band_names: scene.band_names.clone(),
+            materials: scene.materials.clone(),
+            originals: scene.originals.clone(),
+            root: o.root.clone(),
+            suns: Vec::new(),
+            sky: Vec::new(),
+            cameras: Vec::new(),
+        };
+        let polygons = world_polygons(&alone);
+        if polygons.is_empty() {
+            return Err(anyhow!("original '{}' has no polygon", o.name));
+        }
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for c in polygons.iter().flatten() {
+            lo = lo.min(*c);
+            hi = hi.max(*c);
+        }
+        let normals = polygons.iter().map(|p| normal(p)).collect();
+        let areas = polygons
+            .iter()
+            .map(|p| {
+                hirad_core::geometry::polygon_shape(p)
+                    .map(|s| s.area)
+                    .unwrap_or(0.0)
+            })
+            .collect();
+        let vis = ObvhsVisibility::new(&polygons).map_err(|e| anyhow!("{e}"))?;
+        Ok(Self {
+            scene: alone,
+            polygons,
+            normals,
+            areas,
+            lo,
+            hi,
+            vis,
+        })
+    }
+
+    /// A length that takes a ray from any point of the box past all of it (m).
+    pub fn reach(&self) -> f32 {
+        2.0 * (self.hi - self.lo).length() + 1e-3
+    }
+
+    /// Per polygon, the fraction of its area from which a ray towards `towards` leaves
+    /// unblocked, from `k x k` points (see `visible_fraction`).
+    pub fn visible(&self, towards: Vec3, k: u32, seed: u32) -> Vec<f32> {
+        (0..self.polygons.len())
+            .map(|p| {
+                visible_fraction(
+                    &self.vis,
+                    &self.polygons[p],
+                    p as u32,
+                    towards,
+                    self.reach(),
+                    k,
+                    seed,
+                )
+            })
+            .collect()
+    }
+
+    /// Bands of the scene.
+    pub fn bands(&self) -> usize {
+        self.scene.bands as usize
+    }
+
+    /// Solves the original under a sun of 1 W/m^2 in every band towards `source` (unit, in
+    /// the original's frame), with `settings`.
+    pub fn solve(
+        &self,
+        source: Vec3,
+        settings: &Settings,
+        exec: &mut RayonExecutor,
+    ) -> Result<Lit> {
+        let mut s = self.scene.clone();
+        s.suns = vec![scene::light(source, &[1.0; MAX_BANDS][..self.bands()])];
+        let bytes = scene::compile(&s).map_err(|e| anyhow!("{e}"))?;
+        let view = scene::read_image(&bytes).map_err(|e| anyhow!("{e}"))?;
+        let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
+        let plan = hr::plan(&view, settings, false, &mut scratch).map_err(|e| anyhow!("{e}"))?;
+        let mut ws = vec![0u8; plan.suggested_bytes as usize];
+        let two_sided = s.materials.iter().any(|m| m.data.two_sided);
+        let mut table = ResultsTable::new(self.bands(), two_sided);
+        let stats = hr::solve(
+            &view,
+            settings,
+            &mut ws,
+            Some(&self.vis),
+            exec,
+            &mut NoProgress,
+            &mut table,
+        )
+        .map_err(|e| match e {
+            SolveError::Hr(e) => anyhow!("{e}"),
+            SolveError::Sink(e) => e,
+        })?;
+        if table.len() != self.polygons.len() {
+            return Err(anyhow!(
+                "the solve gave {} polygons of {}",
+                table.len(),
+                self.polygons.len()
+            ));
+        }
+        Ok(Lit { table, stats })
+    }
+}
+
+impl Lit {
+    /// The intensity (W/sr per band) leaving the original towards the unit `towards`, given
+    /// each polygon's visible fraction that way: radiance x area x |cosine| x fraction.
+    pub fn intensity(
+        &self,
+        alone: &Alone,
+        towards: Vec3,
+        visible: impl Fn(usize) -> f32,
+    ) -> [f32; MAX_BANDS] {
+        let bands = alone.bands();
+        let mut sum = [0.0f64; MAX_BANDS];
+        for p in 0..alone.polygons.len() {
+            let cos = alone.normals[p].dot(towards).abs();
+            if cos == 0.0 {
+                continue;
+            }
+            let v = visible(p);
+            if v == 0.0 {
+                continue;
+            }
+            let mut l = [0.0f32; MAX_BANDS];
+            self.radiance(alone, p as u32, towards, &mut l);
+            let w = (alone.areas[p] * cos * v) as f64;
+            for (s, x) in sum.iter_mut().zip(&l).take(bands) {
+                *s += w * *x as f64;
+            }
+        }
+        let mut out = [0.0f32; MAX_BANDS];
+        for (o, s) in out.iter_mut().zip(&sum) {
+            *o = *s as f32;
+        }
+        out
+    }
+
+    /// The radiance (W/m^2/sr) polygon `poly` sends towards the unit `towards` from the side
+    /// facing it, into the first bands of `out`.
+    pub fn radiance(&self, alone: &Alone, poly: u32, towards: Vec3, out: &mut [f32; MAX_BANDS]) {
+        let p = poly as usize;
+        let side = if alone.normals[p].dot(towards) >= 0.0 {
+            0
+        } else {
+            1
+        };
+        if side == 1 && !self.table.two_sided {
+            return;
+        }
+        for (o, b) in out.iter_mut().zip(self.table.radiosity(p, side)) {
+            *o = b / std::f32::consts::PI;
+        }
+    }
+}
+
+/// The unit front normal of a polygon (counter-clockwise corners seen from the front).
+fn normal(c: &[Vec3]) -> Vec3 {
+    let n = if c.len() == 4 {
+        (c[2] - c[0]).cross(c[3] - c[1])
+    } else {
+        (c[1] - c[0]).cross(c[2] - c[0])
+    };
+    n.normalize_or_zero()
+}
