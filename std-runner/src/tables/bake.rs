@@ -257,14 +257,15 @@ pub fn bake_original(
             let s = sample_at(&alone, incoming.direction(c), settings, exec)?;
             solves += 1;
             let values = s.intensity_grid(&alone, outgoing, &seen);
-            // Per watt intercepted (W), as the tau table counts it, (1 - tau) A: the
-            // predictions multiply by the table's cross-section.
-            let shadow = (1.0 - s.tau) * s.area;
-            let intercepted: Vec<f32> = vec![shadow; bands];
+            // Per watt intercepted (W): the sun's direct light on the surfaces, from the
+            // same solve as what leaves (a ratio without the rays' noise, which is large
+            // where the contents are seen edge-on); predictions multiply by the tau table's
+            // cross-section, which is refined to its own target.
+            let intercepted: Vec<f32> = (0..bands).map(|b| s.direct[b] * s.area).collect();
             for b in 0..bands {
                 let i = c as usize * bands + b;
-                albedo[i] = if shadow > 0.0 {
-                    (s.scattered[b] * s.area / shadow).clamp(0.0, 1.0)
+                albedo[i] = if s.direct[b] > 0.0 {
+                    (s.scattered[b] / s.direct[b]).clamp(0.0, 1.0)
                 } else {
                     0.0
                 };

@@ -9,6 +9,8 @@
 mod bake;
 mod original;
 mod sample;
+#[cfg(test)]
+mod tests;
 
 pub use bake::{TableSettings, bake_original, uniform_direction};
 pub use original::{Alone, Lit};

@@ -1,0 +1,183 @@
+//! Tables of a single two-sided leaf against their closed forms: under a sun of 1 W/m^2 at
+//! cosine `c` to its normal the leaf intercepts `a |c|`, its lit side leaves `rho |c|` and its
+//! other side `tau |c|` (nothing else is there to light it), and an observer sees the side
+//! facing them, at radiance `B / pi` over the area `a |cosine|`.
+
+use super::{OriginalTables, TableSettings, bake_original};
+use crate::cli::instanced_originals;
+use crate::generate::palette::two_sided;
+use crate::generate::shapes::add_quad;
+use crate::scene::{Cluster, InstanceOf, Original, Scene, Similarity};
+use crate::solve::RayonExecutor;
+use glam::Vec3;
+use hirad_core::sampling::{hash3, unit2};
+use hirad_core::tables::bake::TauSettings;
+
+const RHO: [f32; 2] = [0.1, 0.45];
+const TAU: [f32; 2] = [0.05, 0.4];
+
+/// A scene whose only original is one square leaf of side `side` with normal `n`, placed
+/// once.
+fn one_leaf(n: Vec3, side: f32) -> Scene {
+    let mut scene = Scene::new(2);
+    let m = two_sided(&mut scene, "leaf", &RHO, &RHO, &TAU);
+    let (u, v) = crate::generate::shapes::frame(n);
+    let h = side * 0.5;
+    let mut leaf = Cluster::named("leaf");
+    add_quad(
+        &mut leaf,
+        [-u * h - v * h, u * h - v * h, u * h + v * h, -u * h + v * h],
+        m,
+    );
+    scene.originals.push(Original {
+        name: "leaf".into(),
+        root: leaf,
+    });
+    scene.root.children.push(Cluster {
+        instance: Some(InstanceOf {
+            original: 0,
+            exact: true,
+            transform: Similarity::IDENTITY,
+        }),
+        ..Cluster::default()
+    });
+    scene
+}
+
+fn direction(k: u32, seed: u32) -> Vec3 {
+    let (a, b) = unit2(hash3(seed, k, 0xD1));
+    let z = 1.0 - 2.0 * a;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let p = std::f32::consts::TAU * b;
+    Vec3::new(r * p.cos(), r * p.sin(), z)
+}
+
+fn small_settings() -> TableSettings {
+    TableSettings {
+        tau: TauSettings {
+            rays: 128,
+            target: 0.02,
+            checks: 16,
+            seed: 1,
+        },
+        tau_check_rays: 256,
+        max_tau_side: 32,
+        first_side: 8,
+        max_side: 8,
+        first_out_side: 16,
+        max_out_side: 16,
+        checks: 2,
+        out_checks: 2,
+        ..TableSettings::default()
+    }
+}
+
+fn bake(scene: &Scene) -> OriginalTables {
+    let mut exec = RayonExecutor::new(2).unwrap();
+    bake_original(scene, 0, &small_settings(), &mut exec, &mut |_, _, _| {}).unwrap()
+}
+
+#[test]
+fn a_leafs_tables_match_their_closed_forms() {
+    for (k, side) in [(0u32, 0.5f32), (1, 0.02), (2, 3.0)] {
+        let n = direction(k, 17);
+        let scene = one_leaf(n, side);
+        let t = bake(&scene);
+        let a = side * side;
+        let view = t.view();
+        // Energy per incoming cell: intercepted, scattered, absorbed and uncollided add up.
+        for (i, r) in t.residual.iter().enumerate() {
+            assert!(r.abs() < 0.005, "leaf {k}: residual {r} at {i}");
+        }
+        // The albedo is rho + tau in every cell (both sides reflect alike).
+        for c in 0..t.incoming.cells() {
+            for b in 0..2 {
+                let want = RHO[b] + TAU[b];
+                let got = view.phase().albedo_at(c, b);
+                let d = t.incoming.direction(c);
+                assert!(
+                    (got - want).abs() < 0.02 * want,
+                    "leaf {k} cell {c}: {got} vs {want}; cos {} shadow {} area {}",
+                    n.dot(d),
+                    view.shadow(d),
+                    view.area(d)
+                );
+            }
+        }
+        for j in 0..40 {
+            let source = direction(j, 100 + k);
+            let observer = direction(j, 200 + k);
+            let (ci, co) = (n.dot(source), n.dot(observer));
+            // Scattered power away from the leaf's plane (where |cos| folds).
+            if ci.abs() > 0.2 {
+                for b in 0..2 {
+                    let want = (RHO[b] + TAU[b]) * a * ci.abs();
+                    let got = view.scattered(source, b);
+                    assert!(
+                        (got - want).abs() < 0.02 * want,
+                        "leaf {k}: scattered {got} vs {want}"
+                    );
+                }
+            }
+            // The bidirectional intensity, away from where the side seen or lit flips.
+            if ci.abs() > 0.8 && co.abs() > 0.6 {
+                for b in 0..2 {
+                    let seen = if (ci > 0.0) == (co > 0.0) {
+                        RHO[b]
+                    } else {
+                        TAU[b]
+                    };
+                    let want = seen * ci.abs() / std::f32::consts::PI * a * co.abs();
+                    let got = view.intensity(source, observer, b);
+                    assert!(
+                        (got - want).abs() < 0.03 * want,
+                        "leaf {k}: intensity {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn originals_come_after_the_originals_they_hold() {
+    let mut scene = one_leaf(Vec3::Z, 1.0);
+    // "twig" holds two leaves; "branch" holds a twig; the scene holds a branch only.
+    let leaf_at = |x: f32| Cluster {
+        instance: Some(InstanceOf {
+            original: 0,
+            exact: true,
+            transform: Similarity {
+                translation: Vec3::new(x, 0.0, 0.0),
+                ..Similarity::IDENTITY
+            },
+        }),
+        ..Cluster::default()
+    };
+    let mut twig = Cluster::named("twig");
+    twig.children = vec![leaf_at(0.0), leaf_at(2.0)];
+    let mut branch = Cluster::named("branch");
+    branch.children.push(Cluster {
+        instance: Some(InstanceOf {
+            original: 2,
+            exact: true,
+            transform: Similarity::IDENTITY,
+        }),
+        ..Cluster::default()
+    });
+    // Stored out of order: branch (1) before twig (2); an unused original last.
+    scene.originals.push(Original {
+        name: "branch".into(),
+        root: branch,
+    });
+    scene.originals.push(Original {
+        name: "twig".into(),
+        root: twig,
+    });
+    scene.originals.push(Original {
+        name: "unused".into(),
+        root: Cluster::named("unused"),
+    });
+    scene.root.children[0].instance.as_mut().unwrap().original = 1;
+    assert_eq!(instanced_originals(&scene), vec![0, 2, 1]);
+}
