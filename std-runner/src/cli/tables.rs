@@ -4,7 +4,10 @@ use crate::files;
 use crate::output::Progress;
 use crate::scene::{Cluster, Scene};
 use crate::solve::RayonExecutor;
-use crate::tables::{OriginalTables, TableSettings, bake_original};
+use crate::tables::{
+    CheckReport, OriginalTables, TableSettings, bake_original, check, write_bidirectional,
+    write_directions,
+};
 use anyhow::Result;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -28,9 +31,25 @@ pub struct Args {
     /// relative to it: the intercepted power that scattering is predicted from.
     #[arg(long, default_value_t = 0.01)]
     pub tau_target: f32,
+    /// Largest side of the tau grid (rays only; the cells grow fourfold per doubling).
+    #[arg(long, default_value_t = 128)]
+    pub max_tau_side: u32,
     /// Largest side of the grid of incoming directions (side x side suns, one solve each).
     #[arg(long, default_value_t = 16)]
     pub max_side: u32,
+    /// Write one CSV row per original, band and incoming direction cell (tau, areas,
+    /// albedo, scattered power); the bidirectional values go to FILE_bidirectional.csv
+    /// beside it.
+    #[arg(long, value_name = "FILE.csv")]
+    pub export: Option<PathBuf>,
+    /// Check every table at N random directions off its grids against direct simulations
+    /// of the expanded original (tau by a million rays, scattered power and outgoing
+    /// intensity by an hr solve); exit 1 when a check misses its target.
+    #[arg(long, value_name = "N")]
+    pub check: Option<u32>,
+    /// Write the tables' figures (and the checks') as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
     /// Only the originals with these names (repeatable; default: every instanced original).
     #[arg(long = "original", value_name = "NAME")]
     pub originals: Vec<String>,
@@ -103,6 +122,30 @@ pub fn run(a: Args) -> Result<()> {
     settings.solve.final_rays = a.final_rays;
     settings.max_side = a.max_side;
     settings.tau.target = a.tau_target;
+    settings.max_tau_side = a.max_tau_side;
+    if !(a.epsilon > 0.0 && a.epsilon.is_finite()) {
+        return Err(crate::exit::usage(anyhow::anyhow!(
+            "--epsilon {} must be a positive number",
+            a.epsilon
+        )));
+    }
+    if !(a.tau_target > 0.0 && a.tau_target.is_finite()) {
+        return Err(crate::exit::usage(anyhow::anyhow!(
+            "--tau-target {} must be a positive number",
+            a.tau_target
+        )));
+    }
+    for (flag, side) in [
+        ("--max-side", a.max_side),
+        ("--max-tau-side", a.max_tau_side),
+    ] {
+        if !(4..=hirad_core::tables::grid::MAX_SIDE).contains(&side) {
+            return Err(crate::exit::usage(anyhow::anyhow!(
+                "{flag} {side} must be between 4 and {}",
+                hirad_core::tables::grid::MAX_SIDE
+            )));
+        }
+    }
     let mut exec = RayonExecutor::new(a.threads.unwrap_or(0))?;
     let progress = Progress::new(a.quiet);
     let mut tables: Vec<OriginalTables> = Vec::new();
@@ -124,21 +167,161 @@ pub fn run(a: Args) -> Result<()> {
         .into_iter()
         .filter(|&o| a.originals.is_empty() || a.originals.contains(&scene.originals[o].name))
         .collect();
+    {
+        use crate::paths::Output;
+        let bidirectional = a.export.as_deref().map(bidirectional_path);
+        let mut outputs = Vec::new();
+        if let (Some(p), Some(b)) = (&a.export, &bidirectional) {
+            outputs.push(Output {
+                option: "--export",
+                path: p,
+            });
+            outputs.push(Output {
+                option: "--export (its bidirectional file)",
+                path: b,
+            });
+        }
+        if let Some(p) = &a.stats {
+            outputs.push(Output {
+                option: "--stats",
+                path: p,
+            });
+        }
+        crate::paths::check_outputs(std::slice::from_ref(&a.scene), &outputs)?;
+    }
+    let mut checks = Vec::new();
+    if chosen.is_empty() {
+        eprintln!(
+            "note: {} has no instanced original: there is no table to make",
+            a.scene.display()
+        );
+    }
     for o in chosen {
-        let mut last = String::new();
-        let t = bake_original(&scene, o, &settings, &mut exec, &mut |what, done, total| {
-            if what != last {
-                progress.phase_at(what, Some(total), done);
-                last = what.to_string();
-            } else {
-                progress.set(done);
-            }
-        })?;
+        let mut report = |what: &str, done: u64, total: u64| {
+            progress.phase_at(what, Some(total), done);
+        };
+        let t = bake_original(&scene, o, &settings, &mut exec, &mut report)?;
         progress.finish();
         super::print_out(&summary(&t))?;
+        if let Some(n) = a.check {
+            let r = check(&scene, &t, n, 0xC4EC, &settings, &mut exec, &mut report)?;
+            progress.finish();
+            super::print_out(&check_line(&t.name, &r))?;
+            checks.push(r);
+        }
         tables.push(t);
     }
+    if let Some(path) = &a.export {
+        let names = &scene.band_names;
+        files::write_atomic(path, |w| Ok(write_directions(w, &tables, names)?))?;
+        files::write_atomic(&bidirectional_path(path), |w| {
+            Ok(write_bidirectional(w, &tables, names)?)
+        })?;
+    }
+    if let Some(path) = &a.stats {
+        files::write_atomic(
+            path,
+            |w| Ok(w.write_all(json(&tables, &checks).as_bytes())?),
+        )?;
+    }
+    let unmet: Vec<&str> = tables
+        .iter()
+        .filter(|t| !t.met)
+        .map(|t| t.name.as_str())
+        .collect();
+    let missed: Vec<&str> = tables
+        .iter()
+        .zip(&checks)
+        .filter(|(_, r)| !r.within(&CHECK_TARGETS))
+        .map(|(t, _)| t.name.as_str())
+        .collect();
+    if !missed.is_empty() {
+        return Err(crate::exit::not_right(anyhow::anyhow!(
+            "the checks of {} missed their targets (tau {}, scattered {}%, intensity {}%, energy {}%)",
+            missed.join(", "),
+            CHECK_TARGETS.tau,
+            100.0 * CHECK_TARGETS.scattered,
+            100.0 * CHECK_TARGETS.intensity,
+            100.0 * CHECK_TARGETS.energy
+        )));
+    }
+    if !unmet.is_empty() {
+        return Err(crate::exit::not_right(anyhow::anyhow!(
+            "the tables of {} did not meet their error targets on the finest grids allowed (see above; --max-side)",
+            unmet.join(", ")
+        )));
+    }
     Ok(())
+}
+
+/// What `--check` holds a table to (issue 17's acceptance).
+pub const CHECK_TARGETS: CheckReport = CheckReport {
+    directions: 0,
+    tau: 0.01,
+    scattered: 0.02,
+    intensity: 0.05,
+    uniform_intensity: f32::INFINITY,
+    energy: 0.005,
+};
+
+/// `tables.csv` -> `tables_bidirectional.csv`.
+fn bidirectional_path(path: &std::path::Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}_bidirectional.csv"))
+}
+
+fn check_line(name: &str, r: &CheckReport) -> String {
+    format!(
+        "{name}: checked at {} directions: tau off by {:.4}, scattered {:.2}%, intensity {:.2}% (uniform form {:.2}%), energy {:.3}%\n",
+        r.directions,
+        r.tau,
+        100.0 * r.scattered,
+        100.0 * r.intensity,
+        100.0 * r.uniform_intensity,
+        100.0 * r.energy
+    )
+}
+
+/// The tables' figures and checks as one JSON object.
+fn json(tables: &[OriginalTables], checks: &[CheckReport]) -> String {
+    let mut s = String::from("{\n  \"originals\": [");
+    for (i, t) in tables.iter().enumerate() {
+        let check = checks.get(i).map_or("null".to_string(), |r| {
+            format!(
+                "{{\"directions\": {}, \"tau\": {}, \"scattered\": {}, \"intensity\": {}, \"uniform_intensity\": {}, \"energy\": {}}}",
+                r.directions, r.tau, r.scattered, r.intensity, r.uniform_intensity, r.energy
+            )
+        });
+        let _ = write!(
+            s,
+            "{}\n    {{\"name\": {}, \"polygons\": {}, \"tau_side\": {}, \"tau_error\": {}, \"incoming_side\": {}, \"outgoing_side\": {}, \"scattered_error\": {}, \"intensity_error\": {}, \"met\": {}, \"energy_residual\": [{}], \"bytes\": {}, \"solves\": {}, \"rays\": {}, \"seconds\": {:.3}, \"check\": {}}}",
+            if i == 0 { "" } else { "," },
+            super::info::json_str(&t.name),
+            t.polygons,
+            t.tau_grid.side(),
+            t.tau_error,
+            t.incoming.side(),
+            t.outgoing.side(),
+            t.scattered_error,
+            t.intensity_error,
+            t.met,
+            t.worst_residual()
+                .iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            t.bytes(),
+            t.solves,
+            t.rays,
+            t.seconds,
+            check
+        );
+    }
+    s.push_str("\n  ]\n}\n");
+    s
 }
 
 /// One original's line of the report.

@@ -85,7 +85,7 @@ impl Default for TableSettings {
             out_rays: 4,
             check_out_rays: 8,
             scattered_target: 0.01,
-            intensity_target: 0.03,
+            intensity_target: 0.05,
             checks: 8,
             out_checks: 8,
             seed: 1,

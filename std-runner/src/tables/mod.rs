@@ -7,12 +7,16 @@
 //! of sun); fractions of the power the box intercepts (sun irradiance x `A(dir)`).
 
 mod bake;
+mod check;
+mod export;
 mod original;
 mod sample;
 #[cfg(test)]
 mod tests;
 
 pub use bake::{TableSettings, bake_original, uniform_direction};
+pub use check::{CheckReport, check};
+pub use export::{write_bidirectional, write_directions};
 pub use original::{Alone, Lit};
 pub use sample::{Sample, sample_at};
 
