@@ -38,7 +38,12 @@ seed() {
       (cd "$ROOT" && cargo build --release -q -p hirad)
       for f in "$ROOT"/fixtures/*.hir; do
         "$ROOT/target/release/hirad" convert -q "$f" -o "corpus/$target/$(basename "${f%.hir}").hirb"
-      done ;;
+      done
+      # An image with directional tables (small grids, so that it stays under -max_len; the
+      # targets are not met, which exits 1 after writing it).
+      "$ROOT/target/release/hirad" tables -q "$ROOT/fixtures/small_plant.hir" --max-side 4 \
+        --max-tau-side 4 --max-out-side 8 --tau-target 1 \
+        -o "corpus/$target/small_plant_tables.hirb" >/dev/null || true ;;
   esac
 }
 

@@ -132,6 +132,19 @@ pub enum ImageErrorKind {
     LightValues { light: u32 },
     /// A camera is unusable (non-finite, eye on target, up along the view, bad field of view).
     Camera { camera: u32 },
+    /// A table names no original, or the tables are not in increasing order of originals.
+    TableOriginal { table: u32 },
+    /// A table's bands, grid sides, flags or reserved fields are wrong.
+    TableGrid { table: u32 },
+    /// A table's box is not finite or its corners are not ordered, or an error it records
+    /// is not a finite non-negative number.
+    TableBox { table: u32 },
+    /// A table's values do not follow the previous table's in the pool, or the pool holds
+    /// values no table owns.
+    TableRange { table: u32 },
+    /// A table value is out of its range (`tau` and the albedo 0..=1, the response finite and
+    /// non-negative).
+    TableValue { table: u32, index: u64 },
     /// A caller asked for a record past the end of a section.
     OutOfRange { section: Section, index: u64 },
 }
@@ -239,6 +252,26 @@ impl core::fmt::Display for ImageErrorKind {
             Camera { camera } => write!(
                 f,
                 "camera {camera}: not finite, eye on target, up along the view, or field of view outside (0, 180) degrees"
+            ),
+            TableOriginal { table } => write!(
+                f,
+                "table {table}: names no original, or the tables are not in increasing order of originals"
+            ),
+            TableGrid { table } => write!(
+                f,
+                "table {table}: bands, grid sides (1 to 256), flags or reserved fields are wrong"
+            ),
+            TableBox { table } => write!(
+                f,
+                "table {table}: box not finite or not ordered, or a recorded error is not a finite non-negative number"
+            ),
+            TableRange { table } => write!(
+                f,
+                "table {table}: values do not follow the previous table's in the pool, or the pool holds values no table owns"
+            ),
+            TableValue { table, index } => write!(
+                f,
+                "table {table}: value {index} is out of range (tau and albedo 0 to 1, response finite and non-negative)"
             ),
             OutOfRange { section, index } => write!(f, "no record {index} in section '{}'", section.name()),
         }

@@ -6,10 +6,10 @@ use bytemuck::{Pod, Zeroable};
 pub const MAGIC: [u8; 8] = *b"HIRADSCN";
 
 /// The image version this core reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Number of sections in the table.
-pub const SECTION_COUNT: usize = 13;
+pub const SECTION_COUNT: usize = 15;
 
 /// The sections, in the order they are laid out in the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +41,10 @@ pub enum Section {
     Sky,
     /// [`super::CameraRecord`].
     Cameras,
+    /// [`super::TableRecord`]: an original's directional tables, by increasing original.
+    Tables,
+    /// `f32` pool of the tables' values, each table's `tau`, albedo and response in turn.
+    TableValues,
 }
 
 impl Section {
@@ -59,6 +63,8 @@ impl Section {
         Section::Suns,
         Section::Sky,
         Section::Cameras,
+        Section::Tables,
+        Section::TableValues,
     ];
 
     /// Size of one record in bytes.
@@ -77,6 +83,8 @@ impl Section {
             Section::Originals => core::mem::size_of::<OriginalRecord>(),
             Section::Suns | Section::Sky => core::mem::size_of::<LightRecord>(),
             Section::Cameras => core::mem::size_of::<CameraRecord>(),
+            Section::Tables => core::mem::size_of::<TableRecord>(),
+            Section::TableValues => 4,
         }) as u32
     }
 
@@ -96,6 +104,8 @@ impl Section {
             Section::Suns => "suns",
             Section::Sky => "sky",
             Section::Cameras => "cameras",
+            Section::Tables => "tables",
+            Section::TableValues => "table values",
         }
     }
 }

@@ -21,7 +21,7 @@ pub use header::{FORMAT_VERSION, Header, MAGIC, SECTION_COUNT, Section, SectionE
 pub use layout::{ImageLayout, align8};
 pub use records::{
     CameraRecord, EXACT, HAS_AGE, InstanceRecord, LightRecord, MaterialRecord, NodeRecord,
-    OriginalRecord, PolygonRecord, StringRef,
+    OriginalRecord, PolygonRecord, StringRef, TABLE_MET, TableRecord,
 };
 pub use source::{SceneSource, SliceSource, SourceError};
 pub use view::{CameraData, LightData, SceneInfo, SceneView};

@@ -201,6 +201,58 @@ pub struct CameraRecord {
     pub reserved: u32,
 }
 
+/// An original's directional tables (see [`crate::tables`]): where its values lie in the
+/// table value pool, its grids and box, and the errors its bake measured.
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable, Default)]
+#[repr(C)]
+pub struct TableRecord {
+    /// The original (index into the originals).
+    pub original: u32,
+    /// Bands (equals the image's).
+    pub bands: u32,
+    /// Side of the `tau` grid.
+    pub tau_side: u32,
+    /// Side of the incoming grid of the phase table.
+    pub incoming_side: u32,
+    /// Side of the outgoing grid.
+    pub outgoing_side: u32,
+    /// Bit 0: the bake met its error targets. Other bits zero.
+    pub flags: u32,
+    /// The original's box in its own frame (m): lower corner.
+    pub lo: [f32; 3],
+    /// Upper corner.
+    pub hi: [f32; 3],
+    /// First value of `tau` (`tau_side^2` values) in the pool; the albedo
+    /// (`incoming_side^2 x bands`) and the response (`incoming_side^2 x outgoing_side^2 x
+    /// bands`) follow it.
+    pub first: u64,
+    /// Largest relative error of the cross-section at the bake's check directions.
+    pub tau_error: f32,
+    /// Largest relative error of the scattered power at the bake's check directions.
+    pub scattered_error: f32,
+    /// Largest error of the bidirectional intensity at the bake's check directions.
+    pub intensity_error: f32,
+    /// Zero.
+    pub reserved: u32,
+}
+
+/// Flag of [`TableRecord::flags`]: the bake met its targets.
+pub const TABLE_MET: u32 = 1;
+
+impl TableRecord {
+    /// Values of `tau`, of the albedo and of the response, in that order.
+    pub fn lengths(&self) -> [u64; 3] {
+        let n = |s: u32| s as u64 * s as u64;
+        let albedo = n(self.incoming_side) * self.bands as u64;
+        [n(self.tau_side), albedo, albedo * n(self.outgoing_side)]
+    }
+
+    /// All its values.
+    pub fn values(&self) -> u64 {
+        self.lengths().iter().sum()
+    }
+}
+
 const _: () = {
     assert!(core::mem::size_of::<NodeRecord>() == 72);
     assert!(core::mem::size_of::<PolygonRecord>() == 20);
@@ -209,5 +261,6 @@ const _: () = {
     assert!(core::mem::size_of::<MaterialRecord>() == 16);
     assert!(core::mem::size_of::<LightRecord>() == 16);
     assert!(core::mem::size_of::<CameraRecord>() == 48);
+    assert!(core::mem::size_of::<TableRecord>() == 72);
     assert!(core::mem::size_of::<super::Header>() == 40 + 24 * super::SECTION_COUNT);
 };

@@ -47,6 +47,8 @@ pub struct SceneInfo {
     pub max_node_depth: u32,
     /// Scene root node.
     pub scene_root: NodeId,
+    /// Originals with directional tables.
+    pub tables: u32,
     /// Size of the image in bytes.
     pub image_bytes: u64,
 }
@@ -198,6 +200,33 @@ impl<S: SceneSource> SceneView<S> {
     /// One sky direction.
     pub fn sky(&self, id: LightId) -> Result<LightData, ImageError> {
         self.light(Section::Sky, id)
+    }
+
+    /// Table record `i` (in increasing order of originals).
+    pub fn table(&self, i: u32) -> Result<TableRecord, ImageError> {
+        let mut r = [TableRecord::default()];
+        self.read(Section::Tables, i as u64, &mut r)?;
+        Ok(r[0])
+    }
+
+    /// The table record of `original`, if it has one (a binary search).
+    pub fn table_of(&self, original: OriginalId) -> Result<Option<TableRecord>, ImageError> {
+        let (mut lo, mut hi) = (0u32, self.info.tables);
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            let t = self.table(mid)?;
+            match t.original.cmp(&original.0) {
+                core::cmp::Ordering::Equal => return Ok(Some(t)),
+                core::cmp::Ordering::Less => lo = mid + 1,
+                core::cmp::Ordering::Greater => hi = mid,
+            }
+        }
+        Ok(None)
+    }
+
+    /// Table values from `first` on into `out`.
+    pub fn table_values(&self, first: u64, out: &mut [f32]) -> Result<(), ImageError> {
+        self.read(Section::TableValues, first, out)
     }
 
     /// One camera.

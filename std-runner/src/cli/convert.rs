@@ -48,6 +48,13 @@ pub fn run(a: Args) -> Result<()> {
             );
         }
     }
+    if out_format != Format::Binary && !loaded.scene.tables.is_empty() && !a.quiet {
+        eprintln!(
+            "warning: {}: the directional tables of {} are not kept (only a .hirb holds them; `hirad tables` makes them again)",
+            a.output.display(),
+            super::info::plural(loaded.scene.tables.len() as u64, "original", "originals")
+        );
+    }
     match out_format {
         Format::Text => {
             // Compiling checks the scene, so a .hir output always reads back.

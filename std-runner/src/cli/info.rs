@@ -35,6 +35,8 @@ struct Report {
     info: hirad_core::image::SceneInfo,
     /// The up axis `solve` and `flatten` take, and what says so.
     up: (crate::scene::Up, &'static str),
+    /// Per table: original name, tau side, incoming side, outgoing side, bytes, met.
+    tables: Vec<(String, u32, u32, u32, u64, bool)>,
 }
 
 fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
@@ -48,6 +50,7 @@ fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
         emitting: 0,
         info,
         up: (crate::scene::Up::Y, "the OBJ convention"),
+        tables: Vec::new(),
     };
     if format != Format::Obj {
         let camera = if info.cameras > 0 {
@@ -65,6 +68,21 @@ fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
         if let Some(id) = v.band_name(b)? {
             r.band_names.push(v.string(id, &mut buf)?.to_string());
         }
+    }
+    for t in 0..info.tables {
+        let rec = v.table(t)?;
+        let o = v.original(hirad_core::OriginalId(rec.original))?;
+        let name = v
+            .string(hirad_core::StringId(o.name), &mut buf)?
+            .to_string();
+        r.tables.push((
+            name,
+            rec.tau_side,
+            rec.incoming_side,
+            rec.outgoing_side,
+            4 * rec.values(),
+            rec.flags & hirad_core::image::TABLE_MET != 0,
+        ));
     }
     for m in 0..info.materials {
         let d = v.material(MaterialId(m))?;
@@ -135,6 +153,20 @@ fn table(path: &std::path::Path, r: &Report) -> String {
         i.approximate_instances
     );
     let _ = writeln!(s, "instancing depth  {}", i.instancing_depth);
+    let _ = writeln!(
+        s,
+        "tables            {} of {} originals ({} bytes)",
+        i.tables,
+        i.originals,
+        r.tables.iter().map(|t| t.4).sum::<u64>()
+    );
+    for (name, tau, inc, out, bytes, met) in &r.tables {
+        let _ = writeln!(
+            s,
+            "  {name}: tau grid {tau}, phase {inc} x {out}, {bytes} bytes{}",
+            if *met { "" } else { ", error targets not met" }
+        );
+    }
     let _ = writeln!(s, "cluster depth     {}", i.max_node_depth);
     let _ = writeln!(
         s,
@@ -162,7 +194,7 @@ fn json(path: &std::path::Path, r: &Report) -> String {
             "\"two_sided_materials\":{},\"emitting_materials\":{},\"polygons\":{},\"stored_polygons\":{},",
             "\"vertices\":{},\"clusters\":{},\"originals\":{},\"exact_instances\":{},",
             "\"approximate_instances\":{},\"instancing_depth\":{},\"cluster_depth\":{},\"suns\":{},",
-            "\"sky_directions\":{},\"cameras\":{},\"up_axis\":{},\"image_bytes\":{}}}\n"
+            "\"sky_directions\":{},\"cameras\":{},\"up_axis\":{},\"image_bytes\":{},\"tables\":[{}]}}\n"
         ),
         json_str(&path.display().to_string()),
         json_str(r.format.name()),
@@ -184,7 +216,15 @@ fn json(path: &std::path::Path, r: &Report) -> String {
         i.sky,
         i.cameras,
         json_str(r.up.0.name()),
-        i.image_bytes
+        i.image_bytes,
+        r.tables
+            .iter()
+            .map(|(name, tau, inc, out, bytes, met)| format!(
+                "{{\"original\":{},\"tau_side\":{tau},\"incoming_side\":{inc},\"outgoing_side\":{out},\"bytes\":{bytes},\"met\":{met}}}",
+                json_str(name)
+            ))
+            .collect::<Vec<_>>()
+            .join(",")
     )
 }
 

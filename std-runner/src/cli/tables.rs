@@ -37,6 +37,10 @@ pub struct Args {
     /// Largest side of the grid of incoming directions (side x side suns, one solve each).
     #[arg(long, default_value_t = 16)]
     pub max_side: u32,
+    /// Write the scene with the tables as a binary image (.hirb), for `solve --method hi`
+    /// and for embedded callers.
+    #[arg(long, short, value_name = "OUT.hirb")]
+    pub output: Option<PathBuf>,
     /// Write one CSV row per original, band and incoming direction cell (tau, areas,
     /// albedo, scattered power); the bidirectional values go to FILE_bidirectional.csv
     /// beside it.
@@ -53,6 +57,9 @@ pub struct Args {
     /// Only the originals with these names (repeatable; default: every instanced original).
     #[arg(long = "original", value_name = "NAME")]
     pub originals: Vec<String>,
+    /// Largest side of the grid of outgoing directions (rays only).
+    #[arg(long, default_value_t = 32)]
+    pub max_out_side: u32,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -123,6 +130,7 @@ pub fn run(a: Args) -> Result<()> {
     settings.max_side = a.max_side;
     settings.tau.target = a.tau_target;
     settings.max_tau_side = a.max_tau_side;
+    settings.max_out_side = a.max_out_side;
     if !(a.epsilon > 0.0 && a.epsilon.is_finite()) {
         return Err(crate::exit::usage(anyhow::anyhow!(
             "--epsilon {} must be a positive number",
@@ -187,6 +195,18 @@ pub fn run(a: Args) -> Result<()> {
                 path: p,
             });
         }
+        if let Some(p) = &a.output {
+            if files::Format::of(p).map_err(crate::exit::usage)? != files::Format::Binary {
+                return Err(crate::exit::usage(anyhow::anyhow!(
+                    "-o {}: tables are kept only in a binary image: name it .hirb",
+                    p.display()
+                )));
+            }
+            outputs.push(Output {
+                option: "--output",
+                path: p,
+            });
+        }
         crate::paths::check_outputs(std::slice::from_ref(&a.scene), &outputs)?;
     }
     let mut checks = Vec::new();
@@ -217,6 +237,15 @@ pub fn run(a: Args) -> Result<()> {
         files::write_atomic(&bidirectional_path(path), |w| {
             Ok(write_bidirectional(w, &tables, names)?)
         })?;
+    }
+    if let Some(path) = &a.output {
+        let mut with = scene.clone();
+        for t in &tables {
+            with.tables.retain(|x| x.original != t.index);
+            with.tables.push(t.to_scene());
+        }
+        let bytes = files::compile(&a.scene, &with)?;
+        files::write_atomic(path, |w| Ok(w.write_all(&bytes)?))?;
     }
     if let Some(path) = &a.stats {
         files::write_atomic(

@@ -87,7 +87,50 @@ pub fn compile(scene: &Scene) -> Result<Vec<u8>, SceneError> {
             reserved: 0,
         })
         .collect();
-    let bytes = w.finish(scene.bands as u32, scene_root, &suns, &sky, &cameras)?;
+    // Tables in increasing order of the originals' new indices, values one after another.
+    let mut tables: Vec<&super::Tables> = scene.tables.iter().collect();
+    tables.sort_by_key(|t| w.new_of.get(t.original).copied().unwrap_or(u32::MAX));
+    let mut records = Vec::with_capacity(tables.len());
+    let mut pool: Vec<f32> = Vec::new();
+    for (i, t) in tables.iter().enumerate() {
+        if i > 0 && tables[i - 1].original == t.original {
+            return Err(SceneError {
+                path: String::new(),
+                message: format!("original {} has two tables", t.original),
+            });
+        }
+        if t.values.len() as u64 != t.record.values() {
+            return Err(SceneError {
+                path: String::new(),
+                message: format!(
+                    "the tables of original {} hold {} values where their grids need {}",
+                    t.original,
+                    t.values.len(),
+                    t.record.values()
+                ),
+            });
+        }
+        let Some(&original) = w.new_of.get(t.original) else {
+            return Err(SceneError {
+                path: String::new(),
+                message: format!("tables name original {}, which does not exist", t.original),
+            });
+        };
+        records.push(TableRecord {
+            original,
+            first: pool.len() as u64,
+            ..t.record
+        });
+        pool.extend_from_slice(&t.values);
+    }
+    let bytes = w.finish(
+        scene.bands as u32,
+        scene_root,
+        &suns,
+        &sky,
+        &cameras,
+        (&records, &pool),
+    )?;
     if let Err(e) = SceneView::open(SliceSource(&bytes)) {
         return Err(SceneError {
             path: String::new(),
@@ -246,6 +289,7 @@ impl Writer {
         suns: &[LightRecord],
         sky: &[LightRecord],
         cameras: &[CameraRecord],
+        (tables, table_values): (&[TableRecord], &[f32]),
     ) -> Result<Vec<u8>, SceneError> {
         let sections: [&[u8]; SECTION_COUNT] = [
             &self.strings.bytes,
@@ -261,6 +305,8 @@ impl Writer {
             bytemuck::cast_slice(suns),
             bytemuck::cast_slice(sky),
             bytemuck::cast_slice(cameras),
+            bytemuck::cast_slice(tables),
+            bytemuck::cast_slice(table_values),
         ];
         let mut counts = [0u64; SECTION_COUNT];
         for s in Section::ALL {

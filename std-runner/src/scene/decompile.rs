@@ -71,6 +71,16 @@ pub fn decompile<S: SceneSource>(v: &SceneView<S>) -> Result<Scene, ImageError> 
             fovy_deg: c.fovy_deg,
         });
     }
+    for i in 0..info.tables {
+        let record = v.table(i)?;
+        let mut values = vec![0.0f32; record.values() as usize];
+        v.table_values(record.first, &mut values)?;
+        scene.tables.push(super::Tables {
+            original: record.original as usize,
+            record,
+            values,
+        });
+    }
     Ok(scene)
 }
 

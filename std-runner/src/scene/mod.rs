@@ -49,6 +49,20 @@ pub struct Scene {
     pub sky: Vec<LightData>,
     /// Cameras; the first is the default view.
     pub cameras: Vec<Camera>,
+    /// Directional tables of originals (`hirad tables`), at most one per original; only the
+    /// binary image holds them.
+    pub tables: Vec<Tables>,
+}
+
+/// An original's directional tables as the image stores them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tables {
+    /// Index into [`Scene::originals`].
+    pub original: usize,
+    /// Grids, box and bake errors (its `original` and `first` are set when compiling).
+    pub record: hirad_core::image::TableRecord,
+    /// `tau`, albedo and response values, in that order (see the record's `lengths`).
+    pub values: Vec<f32>,
 }
 
 /// A named material.
@@ -129,6 +143,7 @@ impl Scene {
             suns: Vec::new(),
             sky: Vec::new(),
             cameras: Vec::new(),
+            tables: Vec::new(),
         }
     }
 

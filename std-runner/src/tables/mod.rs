@@ -13,6 +13,8 @@ mod original;
 mod sample;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_image;
 
 pub use bake::{TableSettings, bake_original, uniform_direction};
 pub use check::{CheckReport, check};
@@ -93,6 +95,35 @@ impl OriginalTables {
         .expect("a baked phase table is consistent");
         DirectionalTables::new(self.lo, self.hi, self.tau_grid, &self.tau, phase)
             .expect("baked tables are consistent")
+    }
+
+    /// The tables as the scene model and the image store them.
+    pub fn to_scene(&self) -> crate::scene::Tables {
+        use hirad_core::image::{TABLE_MET, TableRecord};
+        let mut values =
+            Vec::with_capacity(self.tau.len() + self.albedo.len() + self.response.len());
+        values.extend_from_slice(&self.tau);
+        values.extend_from_slice(&self.albedo);
+        values.extend_from_slice(&self.response);
+        crate::scene::Tables {
+            original: self.index,
+            record: TableRecord {
+                original: self.index as u32,
+                bands: self.bands as u32,
+                tau_side: self.tau_grid.side(),
+                incoming_side: self.incoming.side(),
+                outgoing_side: self.outgoing.side(),
+                flags: if self.met { TABLE_MET } else { 0 },
+                lo: self.lo.to_array(),
+                hi: self.hi.to_array(),
+                first: 0,
+                tau_error: self.tau_error,
+                scattered_error: self.scattered_error,
+                intensity_error: self.intensity_error,
+                reserved: 0,
+            },
+            values,
+        }
     }
 
     /// Bytes of the tables' values (f32 each).

@@ -53,6 +53,7 @@ impl Alone {
             suns: Vec::new(),
             sky: Vec::new(),
             cameras: Vec::new(),
+            tables: Vec::new(),
         };
         let polygons = world_polygons(&alone);
         if polygons.is_empty() {

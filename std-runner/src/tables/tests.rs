@@ -18,7 +18,7 @@ const TAU: [f32; 2] = [0.05, 0.4];
 
 /// A scene whose only original is one square leaf of side `side` with normal `n`, placed
 /// once.
-fn one_leaf(n: Vec3, side: f32) -> Scene {
+pub(super) fn one_leaf(n: Vec3, side: f32) -> Scene {
     let mut scene = Scene::new(2);
     let m = two_sided(&mut scene, "leaf", &RHO, &RHO, &TAU);
     let (u, v) = crate::generate::shapes::frame(n);

@@ -18,7 +18,8 @@ mod records;
 mod tree;
 
 use records::{
-    check_cameras, check_lights, check_materials, check_strings, check_values, check_vertices,
+    check_cameras, check_lights, check_materials, check_strings, check_tables, check_values,
+    check_vertices,
 };
 use tree::check_trees;
 
@@ -105,6 +106,7 @@ pub(crate) fn validate<S: SceneSource>(src: S) -> Result<SceneView<S>, ImageErro
     check_lights(&src, &header, Section::Suns)?;
     check_lights(&src, &header, Section::Sky)?;
     check_cameras(&src, &header)?;
+    info.tables = check_tables(&src, &header)?;
     Ok(SceneView { src, header, info })
 }
 

@@ -154,3 +154,77 @@ pub(super) fn check_cameras<S: SceneSource>(src: &S, h: &Header) -> Result<(), I
     }
     Ok(())
 }
+
+/// The tables: each names an original (in increasing order), has the image's bands, grid
+/// sides within the grid's range and a finite ordered box; their values follow each other
+/// in the pool, which holds nothing else, and each value is within its range.
+pub(super) fn check_tables<S: SceneSource>(src: &S, h: &Header) -> Result<u32, ImageError> {
+    let originals = h.section(Section::Originals).count;
+    let pool = h.section(Section::TableValues).count;
+    let mut w: Window<TableRecord, 16> = Window::new(Section::Tables);
+    let mut v: Window<f32, 256> = Window::new(Section::TableValues);
+    let mut next = 0u64;
+    let mut previous: Option<u32> = None;
+    let count = h.section(Section::Tables).count;
+    for i in 0..count {
+        let t = w.get(src, h, i)?;
+        let table = i as u32;
+        if t.original as u64 >= originals || previous.is_some_and(|p| t.original <= p) {
+            return err(h, Section::Tables, i, K::TableOriginal { table });
+        }
+        previous = Some(t.original);
+        let side_ok = |s: u32| (1..=crate::tables::grid::MAX_SIDE).contains(&s);
+        if t.bands != h.bands
+            || !side_ok(t.tau_side)
+            || !side_ok(t.incoming_side)
+            || !side_ok(t.outgoing_side)
+            || t.flags & !TABLE_MET != 0
+            || t.reserved != 0
+        {
+            return err(h, Section::Tables, i, K::TableGrid { table });
+        }
+        let (lo, hi) = (Vec3::from(t.lo), Vec3::from(t.hi));
+        let errors = [t.tau_error, t.scattered_error, t.intensity_error];
+        if !lo.is_finite()
+            || !hi.is_finite()
+            || lo.cmpgt(hi).any()
+            || errors.iter().any(|e| !e.is_finite() || *e < 0.0)
+        {
+            return err(h, Section::Tables, i, K::TableBox { table });
+        }
+        if t.first != next || t.values() > pool.saturating_sub(next) {
+            return err(h, Section::Tables, i, K::TableRange { table });
+        }
+        let [tau, albedo, _] = t.lengths();
+        for k in 0..t.values() {
+            let x = v.get(src, h, next + k)?;
+            let max = if k < tau {
+                1.0
+            } else if k < tau + albedo {
+                1.0 + 1e-3
+            } else {
+                f32::MAX
+            };
+            if !x.is_finite() || !(0.0..=max).contains(&x) {
+                return err(
+                    h,
+                    Section::TableValues,
+                    next + k,
+                    K::TableValue { table, index: k },
+                );
+            }
+        }
+        next += t.values();
+    }
+    if next != pool {
+        return err(
+            h,
+            Section::TableValues,
+            next,
+            K::TableRange {
+                table: count as u32,
+            },
+        );
+    }
+    Ok(count as u32)
+}
