@@ -60,8 +60,7 @@ pub enum Command {
     /// Radiosity in W/m^2 by hierarchical radiosity (default) or the exact full-matrix
     /// solver; optionally the error against a reference results table.
     Solve(solve::Args),
-    /// Compute the directional tables of every instanced original: tau, projected area and
-    /// phase function
+    /// Directional tables of the instanced originals: tau, areas, phase function
     ///
     /// Each original is solved alone under suns from a grid of directions; the tables are
     /// what a closed instance knows of its contents (--method hi).

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 /// Arguments of `hirad tables`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  hirad gen canopy -o canopy.hirb && hirad tables canopy.hirb --export maize.csv\n  hirad tables poplar.hirb --check 20 --stats checks.json"
+    after_help = "Examples:\n  hirad tables canopy.hirb -o canopy_tables.hirb --export maize.csv\n  hirad tables poplar.hirb --original leaf --check 20 --stats checks.json"
 )]
 pub struct Args {
     /// Scene file (.hir, .hirb or .obj).
