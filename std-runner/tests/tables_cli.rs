@@ -38,6 +38,7 @@ fn a_twigs_tables_are_written_and_judged() {
         s(&csv),
         "--stats",
         s(&stats),
+        "--no-cache",
         "-q",
     ]);
     let stdout = String::from_utf8(out.stdout).unwrap();
@@ -98,21 +99,89 @@ fn a_twigs_tables_are_written_and_judged() {
 #[test]
 fn bad_requests_are_usage_errors() {
     let plant = fixture("small_plant.hir");
-    let err = fails_with(2, &["tables", s(&plant), "--original", "nope"]);
+    let err = fails_with(
+        2,
+        &["tables", s(&plant), "--original", "nope", "--no-cache"],
+    );
     assert!(
         err.contains("--original nope") && err.contains("twig, branch"),
         "{err}"
     );
-    let err = fails_with(2, &["tables", s(&plant), "--max-side", "2"]);
+    let err = fails_with(2, &["tables", s(&plant), "--max-side", "2", "--no-cache"]);
     assert!(err.contains("--max-side 2"), "{err}");
-    let err = fails_with(2, &["tables", s(&plant), "--epsilon", "0"]);
+    let err = fails_with(2, &["tables", s(&plant), "--epsilon", "0", "--no-cache"]);
     assert!(err.contains("--epsilon"), "{err}");
     // A scene without instances has no table to make, and says so.
-    let out = hirad(&["tables", s(&fixture("cornell_box.hir"))]);
+    let out = hirad(&["tables", s(&fixture("cornell_box.hir")), "--no-cache"]);
     assert!(out.status.success());
     assert!(
         String::from_utf8(out.stderr)
             .unwrap()
             .contains("no instanced original")
     );
+}
+
+#[test]
+fn a_second_run_takes_the_tables_from_the_cache_and_a_damaged_entry_is_made_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let plant = fixture("small_plant.hir");
+    let run = |tag: &str, epsilon: &str| {
+        let csv = dir.path().join(format!("{tag}.csv"));
+        let stats = dir.path().join(format!("{tag}.json"));
+        let out = hirad(&[
+            "tables",
+            s(&plant),
+            "--original",
+            "twig",
+            "--max-side",
+            "4",
+            "--max-tau-side",
+            "8",
+            "--tau-target",
+            "0.5",
+            "--epsilon",
+            epsilon,
+            "--cache",
+            s(&cache),
+            "--export",
+            s(&csv),
+            "--stats",
+            s(&stats),
+            "-q",
+        ]);
+        let report = String::from_utf8(out.stdout).unwrap();
+        let json = std::fs::read_to_string(&stats).unwrap();
+        (
+            report,
+            number(&json, "cache_hits"),
+            std::fs::read_to_string(csv).unwrap(),
+        )
+    };
+    let (first, hits, csv) = run("first", "1e-4");
+    assert_eq!(hits, 0.0);
+    assert!(!first.contains("from the cache"), "{first}");
+    let (second, hits, again) = run("second", "1e-4");
+    assert_eq!(hits, 1.0, "{second}");
+    assert!(
+        second.contains("0 solves") && second.contains("from the cache"),
+        "{second}"
+    );
+    assert_eq!(again, csv, "the cached tables are the computed ones");
+    // Other settings are other tables.
+    let (_, hits, _) = run("coarser", "1e-3");
+    assert_eq!(hits, 0.0);
+    // Damage every entry: each is made again, not used, then used.
+    for e in std::fs::read_dir(&cache).unwrap() {
+        let path = e.unwrap().path();
+        let mut bytes = std::fs::read(&path).unwrap();
+        let mid = bytes.len() / 2;
+        bytes[mid] ^= 0x55;
+        std::fs::write(&path, bytes).unwrap();
+    }
+    let (third, hits, redone) = run("third", "1e-4");
+    assert_eq!(hits, 0.0, "{third}");
+    assert_eq!(redone, csv);
+    let (_, hits, _) = run("fourth", "1e-4");
+    assert_eq!(hits, 1.0);
 }

@@ -5,7 +5,7 @@ use crate::output::Progress;
 use crate::scene::{Cluster, Scene};
 use crate::solve::RayonExecutor;
 use crate::tables::{
-    CheckReport, OriginalTables, TableSettings, bake_original, check, write_bidirectional,
+    Cache, CheckReport, OriginalTables, TableSettings, bake_alone, check, write_bidirectional,
     write_directions,
 };
 use anyhow::Result;
@@ -60,6 +60,14 @@ pub struct Args {
     /// Largest side of the grid of outgoing directions (rays only).
     #[arg(long, default_value_t = 32)]
     pub max_out_side: u32,
+    /// Folder of the table cache (default: $HIRAD_CACHE, else $XDG_CACHE_HOME/hirad/tables,
+    /// else ~/.cache/hirad/tables). Tables are looked up by a hash of the original's
+    /// geometry, materials and these settings; a damaged entry is recomputed.
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Neither read nor write the table cache.
+    #[arg(long, conflicts_with = "cache")]
+    pub no_cache: bool,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -216,11 +224,40 @@ pub fn run(a: Args) -> Result<()> {
             a.scene.display()
         );
     }
+    let cache = if a.no_cache {
+        None
+    } else {
+        Cache::locate(a.cache.as_deref())
+    };
+    let mut cache_hits = 0u32;
     for o in chosen {
         let mut report = |what: &str, done: u64, total: u64| {
             progress.phase_at(what, Some(total), done);
         };
-        let t = bake_original(&scene, o, &settings, &mut exec, &mut report)?;
+        let name = scene.originals[o].name.clone();
+        let start = std::time::Instant::now();
+        let alone = crate::tables::Alone::new(&scene, o)?;
+        let key = Cache::key(&scene, &alone, &settings);
+        let cached = cache.as_ref().and_then(|c| c.load(&key, &name, o));
+        let t = match cached {
+            Some(mut t) => {
+                cache_hits += 1;
+                t.seconds = start.elapsed().as_secs_f64();
+                t
+            }
+            None => {
+                let t = bake_alone(&scene, o, &alone, &settings, &mut exec, &mut report)?;
+                if let Some(c) = &cache
+                    && let Err(e) = c.store(&key, &t)
+                {
+                    eprintln!(
+                        "warning: the table cache {} cannot be written ({e:#}); the tables were computed and are used",
+                        c.dir().display()
+                    );
+                }
+                t
+            }
+        };
         progress.finish();
         super::print_out(&summary(&t))?;
         if let Some(n) = a.check {
@@ -248,10 +285,9 @@ pub fn run(a: Args) -> Result<()> {
         files::write_atomic(path, |w| Ok(w.write_all(&bytes)?))?;
     }
     if let Some(path) = &a.stats {
-        files::write_atomic(
-            path,
-            |w| Ok(w.write_all(json(&tables, &checks).as_bytes())?),
-        )?;
+        files::write_atomic(path, |w| {
+            Ok(w.write_all(json(&tables, &checks, cache_hits).as_bytes())?)
+        })?;
     }
     let unmet: Vec<&str> = tables
         .iter()
@@ -315,8 +351,8 @@ fn check_line(name: &str, r: &CheckReport) -> String {
 }
 
 /// The tables' figures and checks as one JSON object.
-fn json(tables: &[OriginalTables], checks: &[CheckReport]) -> String {
-    let mut s = String::from("{\n  \"originals\": [");
+fn json(tables: &[OriginalTables], checks: &[CheckReport], cache_hits: u32) -> String {
+    let mut s = format!("{{\n  \"cache_hits\": {cache_hits},\n  \"originals\": [");
     for (i, t) in tables.iter().enumerate() {
         let check = checks.get(i).map_or("null".to_string(), |r| {
             format!(
@@ -377,6 +413,9 @@ fn summary(t: &OriginalTables) -> String {
         t.solves,
         t.seconds
     );
+    if t.solves == 0 {
+        s.insert_str(s.len() - 1, " (from the cache)");
+    }
     for (side, e) in &t.out_tried {
         let _ = writeln!(
             s,

@@ -140,6 +140,19 @@ pub fn bake_original(
     exec: &mut RayonExecutor,
     progress: &mut dyn FnMut(&str, u64, u64),
 ) -> Result<OriginalTables> {
+    let alone = Alone::new(scene, index)?;
+    bake_alone(scene, index, &alone, settings, exec, progress)
+}
+
+/// [`bake_original`] of an original already taken out of its scene.
+pub fn bake_alone(
+    scene: &Scene,
+    index: usize,
+    alone: &Alone,
+    settings: &TableSettings,
+    exec: &mut RayonExecutor,
+    progress: &mut dyn FnMut(&str, u64, u64),
+) -> Result<OriginalTables> {
     let start = Instant::now();
     if settings.first_side == 0
         || settings.max_side > MAX_SIDE
@@ -149,10 +162,9 @@ pub fn bake_original(
     {
         return Err(anyhow!("table settings out of range"));
     }
-    let alone = Alone::new(scene, index)?;
     let bands = alone.bands();
     let name = scene.originals[index].name.clone();
-    let tt = bake_tau_reporting(&alone, &name, settings, progress)?;
+    let tt = bake_tau_reporting(alone, &name, settings, progress)?;
     let tau_values = tt.values.clone();
     let mut rays = tt.rays;
     // The contents' cross-section along a direction, by the tau table (m^2): the light
@@ -176,13 +188,13 @@ pub fn bake_original(
             settings.checks as u64,
         );
         let d = uniform_direction(settings.seed, k, 0x7AB1E);
-        let sample = sample_at(&alone, d, settings, exec)?;
+        let sample = sample_at(alone, d, settings, exec)?;
         solves += 1;
         let mut out = Vec::new();
         for m in 0..settings.out_checks {
             let o = uniform_direction(settings.seed, k * 1000 + m, 0x0C7);
             let (i, r) = sample.intensity(
-                &alone,
+                alone,
                 o,
                 settings.check_out_rays,
                 hash3(settings.seed, k, m),
@@ -203,7 +215,7 @@ pub fn bake_original(
         let grid = DirectionGrid::new(out_side).map_err(|e| anyhow!("{e:?}"))?;
         let mut worst = 0.0f32;
         progress(&format!("{name}: outgoing grid {out_side}{missed}"), 0, 1);
-        let this = Visibilities::new(&alone, grid, settings.out_rays, settings.seed ^ 0x5EED);
+        let this = Visibilities::new(alone, grid, settings.out_rays, settings.seed ^ 0x5EED);
         rays += this.rays();
         for (k, c) in checks.iter().enumerate() {
             progress(
@@ -211,7 +223,7 @@ pub fn bake_original(
                 k as u64,
                 checks.len() as u64,
             );
-            let values = c.sample.intensity_grid(&alone, grid, &this);
+            let values = c.sample.intensity_grid(alone, grid, &this);
             for (o, meas) in &c.out {
                 for b in 0..bands {
                     let w = grid.weights(*o);
@@ -254,9 +266,9 @@ pub fn bake_original(
                 c as u64,
                 n_in as u64,
             );
-            let s = sample_at(&alone, incoming.direction(c), settings, exec)?;
+            let s = sample_at(alone, incoming.direction(c), settings, exec)?;
             solves += 1;
-            let values = s.intensity_grid(&alone, outgoing, &seen);
+            let values = s.intensity_grid(alone, outgoing, &seen);
             // Per watt intercepted (W): the sun's direct light on the surfaces, from the
             // same solve as what leaves (a ratio without the rays' noise, which is large
             // where the contents are seen edge-on); predictions multiply by the tau table's

@@ -7,6 +7,7 @@
 //! of sun); fractions of the power the box intercepts (sun irradiance x `A(dir)`).
 
 mod bake;
+mod cache;
 mod check;
 mod export;
 mod original;
@@ -16,7 +17,8 @@ mod tests;
 #[cfg(test)]
 mod tests_image;
 
-pub use bake::{TableSettings, bake_original, uniform_direction};
+pub use bake::{TableSettings, bake_alone, bake_original, uniform_direction};
+pub use cache::{Cache, Key};
 pub use check::{CheckReport, check};
 pub use export::{write_bidirectional, write_directions};
 pub use original::{Alone, Lit};
@@ -83,6 +85,18 @@ pub struct OriginalTables {
 }
 
 impl OriginalTables {
+    /// The tables as the core reads them, or why they are not sound.
+    pub fn try_view(&self) -> Result<DirectionalTables<'_>, hirad_core::tables::phase::TableError> {
+        let phase = PhaseTable::new(
+            self.incoming,
+            self.outgoing,
+            self.bands,
+            &self.albedo,
+            &self.response,
+        )?;
+        DirectionalTables::new(self.lo, self.hi, self.tau_grid, &self.tau, phase)
+    }
+
     /// The tables as the core reads them.
     pub fn view(&self) -> DirectionalTables<'_> {
         let phase = PhaseTable::new(

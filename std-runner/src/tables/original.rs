@@ -21,6 +21,8 @@ pub struct Alone {
     pub normals: Vec<Vec3>,
     /// Area per polygon (m^2).
     pub areas: Vec<f32>,
+    /// Material index per polygon.
+    pub materials: Vec<u32>,
     /// The bounding box of the polygons (m).
     pub lo: Vec3,
     /// Upper corner.
@@ -56,6 +58,7 @@ impl Alone {
             tables: Vec::new(),
         };
         let polygons = world_polygons(&alone);
+        let materials = polygon_materials(&alone);
         if polygons.is_empty() {
             return Err(anyhow!("original '{}' has no polygon", o.name));
         }
@@ -79,6 +82,7 @@ impl Alone {
             polygons,
             normals,
             areas,
+            materials,
             lo,
             hi,
             vis,
@@ -204,6 +208,21 @@ impl Lit {
             *o = b / std::f32::consts::PI;
         }
     }
+}
+
+/// The material of every polygon of the expanded scene, in global-id order.
+fn polygon_materials(scene: &Scene) -> Vec<u32> {
+    struct Collect(Vec<u32>);
+    impl crate::scene::ExpandVisitor for Collect {
+        type Error = std::convert::Infallible;
+        fn node(&mut self, n: &crate::scene::ExpandedNode<'_>) -> Result<(), Self::Error> {
+            self.0.extend(n.cluster.polygons.iter().map(|p| p.material));
+            Ok(())
+        }
+    }
+    let mut c = Collect(Vec::new());
+    let _ = scene::expand(scene, &mut c);
+    c.0
 }
 
 /// The unit front normal of a polygon (counter-clockwise corners seen from the front).

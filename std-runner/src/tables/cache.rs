@@ -1,0 +1,188 @@
+//! Tables kept on disk between runs, keyed by a hash of what they depend on: the original's
+//! expanded geometry in its own frame, each polygon's material values, the bands and the
+//! table settings. An entry carries its key and a checksum of its contents; one that does
+//! not read back whole, does not match, or holds values out of range is recomputed and
+//! written again, never used.
+//!
+//! Where: `--cache DIR`, else `$HIRAD_CACHE`, else `$XDG_CACHE_HOME/hirad/tables`, else
+//! `$HOME/.cache/hirad/tables`.
+
+use super::OriginalTables;
+use super::bake::TableSettings;
+use super::original::Alone;
+use crate::scene::Scene;
+use anyhow::{Context, Result};
+use glam::Vec3;
+use hirad_core::image::TableRecord;
+use hirad_core::tables::grid::DirectionGrid;
+use std::path::{Path, PathBuf};
+
+/// First bytes of an entry.
+const MAGIC: &[u8; 8] = b"HIRADTBL";
+
+/// Changes whenever what a bake computes changes, so that older entries miss.
+const BAKE_VERSION: u32 = 1;
+
+/// A folder of cached tables.
+#[derive(Clone, Debug)]
+pub struct Cache {
+    dir: PathBuf,
+}
+
+/// An entry's key.
+pub type Key = [u8; 32];
+
+impl Cache {
+    /// The cache folder: `over`, else the environment's (see the module documentation);
+    /// `None` when no folder can be named.
+    pub fn locate(over: Option<&Path>) -> Option<Cache> {
+        let env = |k: &str| {
+            std::env::var_os(k)
+                .filter(|v| !v.is_empty())
+                .map(PathBuf::from)
+        };
+        let dir = over
+            .map(Path::to_path_buf)
+            .or_else(|| env("HIRAD_CACHE"))
+            .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("hirad").join("tables")))
+            .or_else(|| env("HOME").map(|d| d.join(".cache").join("hirad").join("tables")))?;
+        Some(Cache { dir })
+    }
+
+    /// The folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The key of original `alone` of `scene` baked with `settings`.
+    pub fn key(scene: &Scene, alone: &Alone, settings: &TableSettings) -> Key {
+        let mut h = blake3::Hasher::new();
+        h.update(MAGIC);
+        h.update(&BAKE_VERSION.to_le_bytes());
+        h.update(&[scene.bands]);
+        h.update(format!("{settings:?}").as_bytes());
+        h.update(&(alone.polygons.len() as u64).to_le_bytes());
+        for (p, &m) in alone.polygons.iter().zip(&alone.materials) {
+            h.update(&[p.len() as u8]);
+            for c in p {
+                for x in c.to_array() {
+                    h.update(&x.to_bits().to_le_bytes());
+                }
+            }
+            let mut values = [0.0f32; 40];
+            let n = scene.materials[m as usize]
+                .data
+                .to_values(&mut values)
+                .unwrap_or(0);
+            h.update(&[scene.materials[m as usize].data.two_sided as u8]);
+            for v in &values[..n] {
+                h.update(&v.to_bits().to_le_bytes());
+            }
+        }
+        *h.finalize().as_bytes()
+    }
+
+    fn path(&self, key: &Key) -> PathBuf {
+        self.dir.join(format!(
+            "{}.tables",
+            blake3::Hash::from_bytes(*key).to_hex()
+        ))
+    }
+
+    /// The tables of `key`, if an entry holds them whole and sound (named `name`, original
+    /// `index`); `Ok(None)` on a miss, and on an entry that is not sound (which the next
+    /// store replaces).
+    pub fn load(&self, key: &Key, name: &str, index: usize) -> Option<OriginalTables> {
+        let bytes = std::fs::read(self.path(key)).ok()?;
+        decode(&bytes, key, name, index)
+    }
+
+    /// Writes the tables under `key` (through a temporary file, renamed into place).
+    pub fn store(&self, key: &Key, t: &OriginalTables) -> Result<()> {
+        std::fs::create_dir_all(&self.dir)
+            .with_context(|| format!("cannot create the table cache {}", self.dir.display()))?;
+        let path = self.path(key);
+        crate::files::write_atomic(&path, |w| Ok(w.write_all(&encode(key, t))?))
+    }
+}
+
+/// An entry: magic, version, key, the table record, polygons, then the values, absorbed
+/// fractions and residuals as f32, and a checksum of all before it.
+fn encode(key: &Key, t: &OriginalTables) -> Vec<u8> {
+    let rec = t.to_scene();
+    let mut b = Vec::new();
+    b.extend_from_slice(MAGIC);
+    b.extend_from_slice(&BAKE_VERSION.to_le_bytes());
+    b.extend_from_slice(key);
+    b.extend_from_slice(bytemuck::bytes_of(&rec.record));
+    b.extend_from_slice(&(t.polygons as u64).to_le_bytes());
+    for v in rec.values.iter().chain(&t.absorbed).chain(&t.residual) {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    let sum = blake3::hash(&b);
+    b.extend_from_slice(sum.as_bytes());
+    b
+}
+
+fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTables> {
+    let head = 8 + 4 + 32;
+    let rec_size = std::mem::size_of::<TableRecord>();
+    if b.len() < head + rec_size + 8 + 32 {
+        return None;
+    }
+    let (body, sum) = b.split_at(b.len() - 32);
+    if blake3::hash(body).as_bytes() != sum
+        || &body[..8] != MAGIC
+        || body[8..12] != BAKE_VERSION.to_le_bytes()
+        || &body[12..44] != key
+    {
+        return None;
+    }
+    let record: TableRecord = bytemuck::pod_read_unaligned(&body[head..head + rec_size]);
+    let polygons = u64::from_le_bytes(body[head + rec_size..head + rec_size + 8].try_into().ok()?);
+    let floats: Vec<f32> = body[head + rec_size + 8..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    let [tau, albedo, _] = record.lengths();
+    let values = record.values() as usize;
+    let per_cell = albedo as usize;
+    if floats.len() != values + 2 * per_cell {
+        return None;
+    }
+    let grid = |s: u32| DirectionGrid::new(s).ok();
+    let (tau_grid, incoming, outgoing) = (
+        grid(record.tau_side)?,
+        grid(record.incoming_side)?,
+        grid(record.outgoing_side)?,
+    );
+    let (tau_end, albedo_end) = (tau as usize, (tau + albedo) as usize);
+    let t = OriginalTables {
+        name: name.to_string(),
+        index,
+        polygons: polygons as usize,
+        bands: record.bands as usize,
+        lo: Vec3::from(record.lo),
+        hi: Vec3::from(record.hi),
+        tau_grid,
+        tau: floats[..tau_end].to_vec(),
+        tau_error: record.tau_error,
+        incoming,
+        outgoing,
+        albedo: floats[tau_end..albedo_end].to_vec(),
+        response: floats[albedo_end..values].to_vec(),
+        absorbed: floats[values..values + per_cell].to_vec(),
+        residual: floats[values + per_cell..].to_vec(),
+        scattered_error: record.scattered_error,
+        intensity_error: record.intensity_error,
+        tried: Vec::new(),
+        out_tried: Vec::new(),
+        met: record.flags & hirad_core::image::TABLE_MET != 0,
+        solves: 0,
+        rays: 0,
+        seconds: 0.0,
+    };
+    // The values must make sound tables (ranges, lengths, box), as the image's would.
+    t.try_view().ok()?;
+    Some(t)
+}
