@@ -97,18 +97,9 @@ impl OriginalTables {
         DirectionalTables::new(self.lo, self.hi, self.tau_grid, &self.tau, phase)
     }
 
-    /// The tables as the core reads them.
+    /// The tables as the core reads them (a bake or a cache entry is always sound).
     pub fn view(&self) -> DirectionalTables<'_> {
-        let phase = PhaseTable::new(
-            self.incoming,
-            self.outgoing,
-            self.bands,
-            &self.albedo,
-            &self.response,
-        )
-        .expect("a baked phase table is consistent");
-        DirectionalTables::new(self.lo, self.hi, self.tau_grid, &self.tau, phase)
-            .expect("baked tables are consistent")
+        self.try_view().expect("baked tables are consistent")
     }
 
     /// The tables as the scene model and the image store them.
