@@ -20,6 +20,7 @@ fn a_twigs_tables_are_written_and_judged() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("twig.csv");
     let stats = dir.path().join("twig.json");
+    let plots = dir.path().join("plots");
     let plant = fixture("small_plant.hir");
     let out = hirad(&[
         "tables",
@@ -38,11 +39,24 @@ fn a_twigs_tables_are_written_and_judged() {
         s(&csv),
         "--stats",
         s(&stats),
+        "--plot",
+        s(&plots),
         "--no-cache",
         "-q",
     ]);
     let stdout = String::from_utf8(out.stdout).unwrap();
     let stderr = String::from_utf8(out.stderr).unwrap();
+    // One picture per band, named after the original and the band, a real PNG.
+    assert!(stdout.contains("plots: 2 pictures in"), "{stdout}");
+    for band in ["par", "nir"] {
+        let png = std::fs::read(plots.join(format!("twig_{band}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{band}");
+        let (w, h) = (
+            u32::from_be_bytes(png[16..20].try_into().unwrap()),
+            u32::from_be_bytes(png[20..24].try_into().unwrap()),
+        );
+        assert!(w > 720 && h > 3 * 360, "{band}: {w} x {h}");
+    }
     assert!(
         stdout.starts_with("twig: 4 polygons, tau grid "),
         "{stdout}"

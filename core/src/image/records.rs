@@ -222,8 +222,8 @@ pub struct TableRecord {
     pub lo: [f32; 3],
     /// Upper corner.
     pub hi: [f32; 3],
-    /// First value of `tau` (`tau_side^2` values) in the pool; the albedo
-    /// (`incoming_side^2 x bands`) and the response (`incoming_side^2 x outgoing_side^2 x
+    /// First value of `tau` (`tau_side^2` values) in the pool; the albedo (`tau_side^2 x
+    /// bands`, on the `tau` grid) and the response (`incoming_side^2 x outgoing_side^2 x
     /// bands`) follow it.
     pub first: u64,
     /// Largest relative error of the cross-section at the bake's check directions.
@@ -243,8 +243,12 @@ impl TableRecord {
     /// Values of `tau`, of the albedo and of the response, in that order.
     pub fn lengths(&self) -> [u64; 3] {
         let n = |s: u32| s as u64 * s as u64;
-        let albedo = n(self.incoming_side) * self.bands as u64;
-        [n(self.tau_side), albedo, albedo * n(self.outgoing_side)]
+        let bands = self.bands as u64;
+        [
+            n(self.tau_side),
+            n(self.tau_side) * bands,
+            n(self.incoming_side) * n(self.outgoing_side) * bands,
+        ]
     }
 
     /// All its values.

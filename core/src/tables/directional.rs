@@ -1,13 +1,18 @@
 //! All the tables of one original together: what a closed instance of it does with light
 //! (DESIGN.md "Instances inside a level"): it blocks by `tau`, intercepts by the
-//! cross-section `(1 - tau) A`, and sends out the scattered part of what it intercepts,
-//! either spread by the uniform form (the paper's) or by the bidirectional response.
+//! cross-section `(1 - tau) A`, scatters out the albedo's share of what it intercepts, and
+//! spreads that either by the uniform form (the paper's) or by the bidirectional response.
+//!
+//! `tau` and the albedo share a grid, refined until the cross-section meets its target: the
+//! albedo changes sharply wherever the cross-section does (a sun that crosses the plane of a
+//! leaf moves from its front, which reflects one way, to its back), and both come from the
+//! same rays.
 //! Units: m^2 for areas and powers per unit irradiance (W per W/m^2), m^2/sr for intensities
 //! per unit irradiance.
 
 use super::grid::DirectionGrid;
 use super::phase::{PhaseTable, TableError, check_values};
-use super::tau::{interpolate_tau, projected_area};
+use super::tau::{interpolate_scattered, interpolate_tau, projected_area};
 use glam::Vec3;
 
 /// An original's `tau` and phase tables, over caller storage.
@@ -21,6 +26,9 @@ pub struct DirectionalTables<'a> {
     tau_grid: DirectionGrid,
     /// `tau` per cell (0..=1).
     tau: &'a [f32],
+    /// `[cell * bands + band]` on the `tau` grid: of the power the contents intercept from a
+    /// sun in that cell, the fraction that leaves the box scattered (0..=1).
+    albedo: &'a [f32],
     /// The phase table.
     phase: PhaseTable<'a>,
     /// The cross-section integrated over the sphere (m^2 sr): the uniform form's spread.
@@ -28,18 +36,24 @@ pub struct DirectionalTables<'a> {
 }
 
 impl<'a> DirectionalTables<'a> {
-    /// Checks the box and `tau` and puts them together with the phase table.
+    /// Checks the box, `tau` and the albedo and puts them together with the phase table.
     pub fn new(
         lo: Vec3,
         hi: Vec3,
         tau_grid: DirectionGrid,
         tau: &'a [f32],
+        albedo: &'a [f32],
         phase: PhaseTable<'a>,
     ) -> Result<Self, TableError> {
         if !lo.is_finite() || !hi.is_finite() || lo.cmpgt(hi).any() {
             return Err(TableError::Box);
         }
         check_values(tau, tau_grid.cells() as u64, 1.0)?;
+        check_values(
+            albedo,
+            tau_grid.cells() as u64 * phase.bands() as u64,
+            1.0 + 1e-3,
+        )?;
         let shadow_integral = (0..tau_grid.cells())
             .map(|c| {
                 let d = tau_grid.direction(c);
@@ -52,6 +66,7 @@ impl<'a> DirectionalTables<'a> {
             hi,
             tau_grid,
             tau,
+            albedo,
             phase,
             shadow_integral,
         })
@@ -70,6 +85,11 @@ impl<'a> DirectionalTables<'a> {
     /// `tau` at the cell centres.
     pub fn tau_values(&self) -> &'a [f32] {
         self.tau
+    }
+
+    /// The albedo at the cells of the `tau` grid, `[cell * bands + band]`.
+    pub fn albedo_values(&self) -> &'a [f32] {
+        self.albedo
     }
 
     /// The phase table.
@@ -93,15 +113,38 @@ impl<'a> DirectionalTables<'a> {
     }
 
     /// Power scattered out of the box in band `band` for a sun of 1 W/m^2 towards `source`
-    /// (m^2).
+    /// (m^2): the scattered cross-section `albedo (1 - tau) A`, interpolated as a whole for
+    /// the reason `tau` is (see [`interpolate_tau`]).
     pub fn scattered(&self, source: Vec3, band: usize) -> f32 {
-        self.phase.albedo(source, band) * self.shadow(source)
+        interpolate_scattered(
+            &self.tau_grid,
+            self.tau,
+            self.albedo,
+            self.phase.bands(),
+            band,
+            self.lo,
+            self.hi,
+            source,
+        )
+    }
+
+    /// Of the power intercepted from a sun towards `source`, the fraction scattered out in
+    /// band `band` (0..=1; 0 where nothing is intercepted).
+    pub fn albedo(&self, source: Vec3, band: usize) -> f32 {
+        let s = self.shadow(source);
+        if s > 0.0 {
+            (self.scattered(source, band) / s).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
     }
 
     /// Intensity leaving the box towards `observer` in band `band` for a sun of 1 W/m^2
     /// towards `source` (m^2/sr), by the bidirectional response.
     pub fn intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
-        self.phase.response(source, observer, band) * self.shadow(source) * self.shadow(observer)
+        self.phase.response(source, observer, band)
+            * self.scattered(source, band)
+            * self.shadow(observer)
     }
 
     /// The same by the uniform form: the scattered power leaves as if from a surface of

@@ -1,14 +1,15 @@
-//! An original's phase table (paper section 3.1, DESIGN.md "Directional table"): what its
-//! contents scatter out of the box for the light they intercept, as functions of the
-//! incoming direction (the albedo: the uniform form, the paper's) and of the incoming and
-//! outgoing directions (the response: the bidirectional form).
+//! An original's phase table, bidirectional form (paper section 3.1, DESIGN.md
+//! "Directional table"): how the light its contents scatter out of the box spreads over the
+//! outgoing directions, as a function of the incoming and outgoing directions.
 //!
-//! Both are per unit of intercepted power (and the response per unit of the cross-section
-//! seen), so that they are smooth in the directions: how much a sun's light the contents intercept changes sharply (a maize plant's
-//! leaves stand in one plane, and a sun in that plane meets their edges), and that is the
-//! `tau` table's business (the cross-section `(1 - tau) A`), measured by rays alone on a grid
-//! as fine as it needs. Directions are unit vectors in the original's frame: incoming ones
-//! point towards the source (as a sun's `towards`), outgoing ones towards the observer.
+//! It is per watt scattered and per unit of the cross-section seen, so that it is smooth in
+//! the directions: how much of a sun's light the contents intercept and scatter changes
+//! sharply (a maize plant's leaves stand in one plane, and a sun in that plane meets their
+//! edges; their two sides reflect differently), and that is the business of the tables on
+//! the `tau` grid (the cross-section `(1 - tau) A` and the albedo, see
+//! [`super::directional`]), measured by rays alone on a grid as fine as it needs.
+//! Directions are unit vectors in the original's frame: incoming ones point towards the
+//! source (as a sun's `towards`), outgoing ones towards the observer.
 
 use super::grid::DirectionGrid;
 use crate::limits::MAX_BANDS;
@@ -23,15 +24,11 @@ pub struct PhaseTable<'a> {
     outgoing: DirectionGrid,
     /// Bands, 1..=MAX_BANDS.
     bands: usize,
-    /// `[cell_in * bands + band]`: of the power the contents intercept from a sun in that
-    /// cell, the fraction that leaves the box scattered, 0..=1.
-    albedo: &'a [f32],
     /// `[(cell_in * out_cells + cell_out) * bands + band]`: the radiant intensity (W/sr)
-    /// that leaves the box towards the outgoing cell per watt intercepted from a sun in the
-    /// incoming cell and per m^2 of the contents' cross-section seen from the outgoing cell:
-    /// the mean radiance of what an observer there sees, per watt intercepted
-    /// (1/(m^2 sr)). Per unit cross-section for the same reason as the albedo: how much of
-    /// the contents an observer sees changes sharply with the direction.
+    /// that leaves the box towards the outgoing cell per watt scattered out of it from a sun
+    /// in the incoming cell and per m^2 of the contents' cross-section seen from the
+    /// outgoing cell: the mean radiance of what an observer there sees, per watt scattered
+    /// (1/(m^2 sr)). Over the sphere, response x cross-section integrates to about 1.
     response: &'a [f32],
 }
 
@@ -75,25 +72,22 @@ pub(super) fn check_values(values: &[f32], expected: u64, max: f32) -> Result<()
 }
 
 impl<'a> PhaseTable<'a> {
-    /// Checks the lengths and values of `albedo` and `response` against the grids.
+    /// Checks the length and values of `response` against the grids.
     pub fn new(
         incoming: DirectionGrid,
         outgoing: DirectionGrid,
         bands: usize,
-        albedo: &'a [f32],
         response: &'a [f32],
     ) -> Result<Self, TableError> {
         if bands == 0 || bands > MAX_BANDS {
             return Err(TableError::Bands);
         }
         let n_in = incoming.cells() as u64 * bands as u64;
-        check_values(albedo, n_in, 1.0 + 1e-3)?;
         check_values(response, n_in * outgoing.cells() as u64, f32::MAX)?;
         Ok(Self {
             incoming,
             outgoing,
             bands,
-            albedo,
             response,
         })
     }
@@ -113,15 +107,6 @@ impl<'a> PhaseTable<'a> {
         self.bands
     }
 
-    /// The albedo of band `band` for a sun towards `source`, interpolated.
-    pub fn albedo(&self, source: Vec3, band: usize) -> f32 {
-        self.incoming
-            .weights(source)
-            .iter()
-            .map(|&(c, w)| w * self.albedo_at(c, band))
-            .sum()
-    }
-
     /// The response (1/(m^2 sr)) of band `band` towards `observer` for a sun towards `source`,
     /// interpolated linearly in both directions.
     pub fn response(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
@@ -136,11 +121,6 @@ impl<'a> PhaseTable<'a> {
             }
         }
         sum
-    }
-
-    /// The albedo at incoming cell `cell` (no interpolation).
-    pub fn albedo_at(&self, cell: u32, band: usize) -> f32 {
-        self.albedo[cell as usize * self.bands + band]
     }
 
     /// The response at incoming cell `cell_in`, outgoing cell `cell_out`.

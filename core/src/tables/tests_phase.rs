@@ -111,10 +111,45 @@ fn tables_refuse_storage_that_does_not_fit() {
     let g = DirectionGrid::new(2).unwrap();
     let ok = vec![0.5f32; 4 * 2];
     let bi = vec![0.1f32; 4 * 4 * 2];
-    assert!(PhaseTable::new(g, g, 2, &ok, &bi).is_ok());
-    assert_eq!(PhaseTable::new(g, g, 0, &ok, &bi), Err(TableError::Bands));
+    assert!(PhaseTable::new(g, g, 2, &bi).is_ok());
+    assert_eq!(PhaseTable::new(g, g, 0, &bi), Err(TableError::Bands));
+    assert_eq!(PhaseTable::new(g, g, 9, &bi), Err(TableError::Bands));
     assert_eq!(
-        PhaseTable::new(g, g, 2, &ok[..7], &bi),
+        PhaseTable::new(g, g, 2, &bi[..31]),
+        Err(TableError::Length {
+            expected: 32,
+            given: 31
+        })
+    );
+    let mut neg = bi.clone();
+    neg[31] = -1.0;
+    assert_eq!(
+        PhaseTable::new(g, g, 2, &neg),
+        Err(TableError::Value { index: 31 })
+    );
+    neg[31] = f32::INFINITY;
+    assert_eq!(
+        PhaseTable::new(g, g, 2, &neg),
+        Err(TableError::Value { index: 31 })
+    );
+    let phase = PhaseTable::new(g, g, 2, &bi).unwrap();
+    let tau = vec![0.5f32; 4];
+    let new = |lo, hi, tau: &[f32], albedo: &[f32]| {
+        DirectionalTables::new(lo, hi, g, tau, albedo, phase).map(|_| ())
+    };
+    assert_eq!(new(Vec3::ZERO, Vec3::ONE, &tau, &ok), Ok(()));
+    assert_eq!(new(Vec3::ONE, Vec3::ZERO, &tau, &ok), Err(TableError::Box));
+    assert_eq!(
+        new(Vec3::ZERO, Vec3::splat(f32::INFINITY), &tau, &ok),
+        Err(TableError::Box)
+    );
+    assert_eq!(
+        new(Vec3::ZERO, Vec3::ONE, &[0.5, 0.5, 2.0, 0.5], &ok),
+        Err(TableError::Value { index: 2 })
+    );
+    // The albedo lives on the tau grid, a value per cell and band, each a fraction.
+    assert_eq!(
+        new(Vec3::ZERO, Vec3::ONE, &tau, &ok[..7]),
         Err(TableError::Length {
             expected: 8,
             given: 7
@@ -123,33 +158,13 @@ fn tables_refuse_storage_that_does_not_fit() {
     let mut bad = ok.clone();
     bad[5] = f32::NAN;
     assert_eq!(
-        PhaseTable::new(g, g, 2, &bad, &bi),
+        new(Vec3::ZERO, Vec3::ONE, &tau, &bad),
         Err(TableError::Value { index: 5 })
     );
     bad[5] = 1.5;
     assert_eq!(
-        PhaseTable::new(g, g, 2, &bad, &bi),
+        new(Vec3::ZERO, Vec3::ONE, &tau, &bad),
         Err(TableError::Value { index: 5 })
-    );
-    let mut neg = bi.clone();
-    neg[31] = -1.0;
-    assert_eq!(
-        PhaseTable::new(g, g, 2, &ok, &neg),
-        Err(TableError::Value { index: 31 })
-    );
-    let phase = PhaseTable::new(g, g, 2, &ok, &bi).unwrap();
-    let tau = vec![0.5f32; 4];
-    assert_eq!(
-        DirectionalTables::new(Vec3::ONE, Vec3::ZERO, g, &tau, phase),
-        Err(TableError::Box)
-    );
-    assert_eq!(
-        DirectionalTables::new(Vec3::ZERO, Vec3::splat(f32::INFINITY), g, &tau, phase),
-        Err(TableError::Box)
-    );
-    assert_eq!(
-        DirectionalTables::new(Vec3::ZERO, Vec3::ONE, g, &[0.5, 0.5, 2.0, 0.5], phase),
-        Err(TableError::Value { index: 2 })
     );
 }
 
@@ -166,8 +181,8 @@ fn the_uniform_form_sends_out_what_is_scattered() {
         .collect();
     let out = DirectionGrid::new(4).unwrap();
     let response = vec![0.05f32; (g.cells() * out.cells()) as usize];
-    let phase = PhaseTable::new(g, out, 1, &albedo, &response).unwrap();
-    let t = DirectionalTables::new(lo, hi, g, &tau, phase).unwrap();
+    let phase = PhaseTable::new(g, out, 1, &response).unwrap();
+    let t = DirectionalTables::new(lo, hi, g, &tau, &albedo, phase).unwrap();
     for k in 0..5 {
         let source = unit(k, 71);
         // The intensity of the uniform form summed over the sphere, on a grid of its own.
@@ -178,13 +193,27 @@ fn the_uniform_form_sends_out_what_is_scattered() {
             * fine.solid_angle();
         let want = t.scattered(source, 0);
         assert!((total - want).abs() < 0.01 * want, "{total} vs {want}");
-        // Scattered power is the albedo times the shadow; the bidirectional intensity is
-        // the response times both shadows.
+        // Scattered power is the albedo times the shadow, the albedo within the range of
+        // the cells around; the bidirectional intensity is the response times the
+        // scattered power and the shadow seen.
         let shadow = (1.0 - t.tau(source)) * t.area(source);
         assert!((t.shadow(source) - shadow).abs() < 1e-5);
-        assert!((want - t.phase().albedo(source, 0) * shadow).abs() < 1e-5);
+        assert!((want - t.albedo(source, 0) * shadow).abs() < 1e-5);
+        let near: Vec<f32> = g
+            .weights(source)
+            .iter()
+            .map(|&(c, _)| albedo[c as usize])
+            .collect();
+        let (lo_a, hi_a) = near
+            .iter()
+            .fold((1.0f32, 0.0f32), |(a, b), &x| (a.min(x), b.max(x)));
+        let a = t.albedo(source, 0);
+        assert!(
+            a >= lo_a - 0.02 && a <= hi_a + 0.02,
+            "{a} outside {lo_a}..{hi_a}"
+        );
         let observer = unit(k, 72);
         let i = t.intensity(source, observer, 0);
-        assert!((i - 0.05 * shadow * t.shadow(observer)).abs() < 1e-5 * (1.0 + i));
+        assert!((i - 0.05 * want * t.shadow(observer)).abs() < 1e-5 * (1.0 + i));
     }
 }

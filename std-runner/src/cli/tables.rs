@@ -46,6 +46,11 @@ pub struct Args {
     /// beside it.
     #[arg(long, value_name = "FILE.csv")]
     pub export: Option<PathBuf>,
+    /// Write one PNG per original and band into DIR (created if needed): maps over the
+    /// sphere of tau, of the scattered power by sun direction and of the bidirectional
+    /// intensity for one sun, each with a colour bar and its unit.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
     /// Check every table at N random directions off its grids against direct simulations
     /// of the expanded original (tau by a million rays, scattered power and outgoing
     /// intensity by an hr solve); exit 1 when a check misses its target.
@@ -275,6 +280,14 @@ pub fn run(a: Args) -> Result<()> {
             Ok(write_bidirectional(w, &tables, names)?)
         })?;
     }
+    if let Some(dir) = &a.plot {
+        let written = crate::tables::write_plots(dir, &tables, &scene.band_names)?;
+        super::print_out(&format!(
+            "plots: {} pictures in {}\n",
+            written.len(),
+            dir.display()
+        ))?;
+    }
     if let Some(path) = &a.output {
         let mut with = scene.clone();
         for t in &tables {
@@ -326,6 +339,8 @@ pub const CHECK_TARGETS: CheckReport = CheckReport {
     scattered: 0.02,
     intensity: 0.05,
     uniform_intensity: f32::INFINITY,
+    hotspot: f32::INFINITY,
+    worst: (glam::Vec3::ZERO, glam::Vec3::ZERO),
     energy: 0.005,
 };
 
@@ -340,12 +355,19 @@ fn bidirectional_path(path: &std::path::Path) -> PathBuf {
 
 fn check_line(name: &str, r: &CheckReport) -> String {
     format!(
-        "{name}: checked at {} directions: tau off by {:.4}, scattered {:.2}%, intensity {:.2}% (uniform form {:.2}%), energy {:.3}%\n",
+        "{name}: checked at {} directions: tau off by {:.4}, scattered {:.2}%, intensity {:.2}% (worst towards the sun {:.3} {:.3} {:.3}, the observer {:.3} {:.3} {:.3}; uniform form {:.2}%; at the hot spot {:.2}%), energy {:.3}%\n",
         r.directions,
         r.tau,
         100.0 * r.scattered,
         100.0 * r.intensity,
+        r.worst.0.x,
+        r.worst.0.y,
+        r.worst.0.z,
+        r.worst.1.x,
+        r.worst.1.y,
+        r.worst.1.z,
         100.0 * r.uniform_intensity,
+        100.0 * r.hotspot,
         100.0 * r.energy
     )
 }
@@ -356,8 +378,8 @@ fn json(tables: &[OriginalTables], checks: &[CheckReport], cache_hits: u32) -> S
     for (i, t) in tables.iter().enumerate() {
         let check = checks.get(i).map_or("null".to_string(), |r| {
             format!(
-                "{{\"directions\": {}, \"tau\": {}, \"scattered\": {}, \"intensity\": {}, \"uniform_intensity\": {}, \"energy\": {}}}",
-                r.directions, r.tau, r.scattered, r.intensity, r.uniform_intensity, r.energy
+                "{{\"directions\": {}, \"tau\": {}, \"scattered\": {}, \"intensity\": {}, \"uniform_intensity\": {}, \"hotspot\": {}, \"energy\": {}}}",
+                r.directions, r.tau, r.scattered, r.intensity, r.uniform_intensity, r.hotspot, r.energy
             )
         });
         let _ = write!(

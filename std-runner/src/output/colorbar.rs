@@ -168,9 +168,20 @@ pub fn title(map: &MapDisplay) -> Vec<String> {
 
 /// Draws the panel, bar, ticks and labels (see [`layout`]).
 fn draw_bar(rgb: &mut [u8], width: u32, height: u32, map: &MapDisplay, scale: &Scale) {
-    let labels: Vec<String> = scale.ticks.iter().map(|&v| scale.label(v)).collect();
-    let title = title(map);
-    let Some(l) = layout(width, height, &labels, &title) else {
+    draw_titled_bar(rgb, width, height, &title(map), scale);
+}
+
+/// The labels of `scale`'s ticks.
+pub fn tick_labels(scale: &Scale) -> Vec<String> {
+    scale.ticks.iter().map(|&v| scale.label(v)).collect()
+}
+
+/// Draws a black panel at the right of an 8-bit RGB image with the colour bar of `scale`,
+/// its ticks and labels, under the lines of `title` (see [`layout`]); nothing when the
+/// image is too small.
+pub fn draw_titled_bar(rgb: &mut [u8], width: u32, height: u32, title: &[String], scale: &Scale) {
+    let labels = tick_labels(scale);
+    let Some(l) = layout(width, height, &labels, title) else {
         return;
     };
     let w = width as usize;

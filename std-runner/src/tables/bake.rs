@@ -4,8 +4,10 @@
 //! target").
 
 use super::OriginalTables;
+use super::intercept::EscapeWeights;
 use super::original::Alone;
 use super::sample::{Sample, Visibilities, sample_at};
+use super::tau_bake::bake_tau;
 use crate::scene::Scene;
 use crate::solve::RayonExecutor;
 use anyhow::{Result, anyhow};
@@ -13,9 +15,9 @@ use glam::Vec3;
 use hirad_core::hr::Settings;
 use hirad_core::limits::MAX_BANDS;
 use hirad_core::sampling::{hash3, unit2};
-use hirad_core::tables::bake::{TauSettings, bake_tau};
+use hirad_core::tables::bake::TauSettings;
 use hirad_core::tables::grid::{DirectionGrid, MAX_SIDE};
-use hirad_core::tables::tau::{interpolate_tau, tau};
+use hirad_core::tables::tau::interpolate_tau;
 use std::time::Instant;
 
 /// How tables are made.
@@ -28,6 +30,9 @@ pub struct TableSettings {
     /// Rays along each side of the estimates that check the `tau` table (more than the
     /// cells', so that the check's own noise stays below the target).
     pub tau_check_rays: u32,
+    /// Side of the grid of suns whose solve gives the polygons' escape weights (see
+    /// [`super::intercept`]).
+    pub escape_side: u32,
     /// Largest side of the `tau` grid.
     pub max_tau_side: u32,
     /// Side of the first grid of incoming directions tried.
@@ -76,6 +81,7 @@ impl Default for TableSettings {
                 seed: 1,
             },
             tau_check_rays: 1024,
+            escape_side: 16,
             solve,
             max_tau_side: 128,
             first_side: 4,
@@ -164,8 +170,9 @@ pub fn bake_alone(
     }
     let bands = alone.bands();
     let name = scene.originals[index].name.clone();
-    let tt = bake_tau_reporting(alone, &name, settings, progress)?;
-    let tau_values = tt.values.clone();
+    progress(&format!("{name}: escape weights"), 0, 1);
+    let weights = EscapeWeights::solve(alone, settings.escape_side, &settings.solve, exec)?;
+    let tt = bake_tau(alone, &weights, &name, settings, progress)?;
     let mut rays = tt.rays;
     // The contents' cross-section along a direction, by the tau table (m^2): the light
     // leaving towards an observer is stored per unit of it.
@@ -177,7 +184,7 @@ pub fn bake_alone(
         let s = shadow(d);
         if s > 0.0 { j / s } else { 0.0 }
     };
-    let mut solves = 0u32;
+    let mut solves = 1u32;
 
     // Check directions, off every grid (drawn uniformly), each solved once.
     let mut checks = Vec::new();
@@ -256,7 +263,6 @@ pub fn bake_alone(
         let incoming = DirectionGrid::new(side).map_err(|e| anyhow!("{e:?}"))?;
         let n_in = incoming.cells() as usize;
         let n_out = outgoing.cells() as usize;
-        let mut albedo = vec![0.0f32; n_in * bands];
         let mut absorbed = vec![0.0f32; n_in * bands];
         let mut residual = vec![0.0f32; n_in * bands];
         let mut response = Vec::with_capacity(n_in * n_out * bands);
@@ -269,18 +275,12 @@ pub fn bake_alone(
             let s = sample_at(alone, incoming.direction(c), settings, exec)?;
             solves += 1;
             let values = s.intensity_grid(alone, outgoing, &seen);
-            // Per watt intercepted (W): the sun's direct light on the surfaces, from the
-            // same solve as what leaves (a ratio without the rays' noise, which is large
-            // where the contents are seen edge-on); predictions multiply by the tau table's
-            // cross-section, which is refined to its own target.
-            let intercepted: Vec<f32> = (0..bands).map(|b| s.direct[b] * s.area).collect();
+            // Per watt scattered (W), from the same solve as what leaves; predictions
+            // multiply by the scattered power from the tables on the `tau` grid, which are
+            // refined to their own target.
+            let scattered: Vec<f32> = (0..bands).map(|b| s.scattered[b] * s.area).collect();
             for b in 0..bands {
                 let i = c as usize * bands + b;
-                albedo[i] = if s.direct[b] > 0.0 {
-                    (s.scattered[b] / s.direct[b]).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
                 absorbed[i] = s.absorbed[b];
                 let out: f64 = (0..n_out)
                     .map(|o| values[o * bands + b] as f64)
@@ -297,8 +297,8 @@ pub fn bake_alone(
                 let d = outgoing.direction(o as u32);
                 for b in 0..bands {
                     let j = per_shadow(values[o * bands + b], d);
-                    response.push(if intercepted[b] > 0.0 {
-                        j / intercepted[b]
+                    response.push(if scattered[b] > 0.0 {
+                        j / scattered[b]
                     } else {
                         0.0
                     });
@@ -313,11 +313,11 @@ pub fn bake_alone(
             lo: alone.lo,
             hi: alone.hi,
             tau_grid: tt.grid,
-            tau: tau_values.clone(),
+            tau: tt.values.clone(),
+            albedo: tt.albedo.clone(),
             tau_error: tt.error,
             incoming,
             outgoing,
-            albedo,
             response,
             absorbed,
             residual,
@@ -356,72 +356,6 @@ pub fn bake_alone(
             t.met = met && tt.met;
             t.seconds = start.elapsed().as_secs_f64();
             return Ok(t);
-        }
-        side *= 2;
-    }
-}
-
-/// A `tau` table and what making it cost.
-struct Tau {
-    grid: DirectionGrid,
-    values: Vec<f32>,
-    error: f32,
-    met: bool,
-    rays: u64,
-}
-
-/// `tau` on grids of side 4, 8, ... up to `settings.max_tau_side`, until interpolation
-/// meets the target at the check directions (the core's `bake_tau_to_target`, one grid at a
-/// time so that progress can be shown).
-fn bake_tau_reporting(
-    alone: &Alone,
-    name: &str,
-    settings: &TableSettings,
-    progress: &mut dyn FnMut(&str, u64, u64),
-) -> Result<Tau> {
-    let mut side = 4u32;
-    let mut rays = 0u64;
-    let mut missed = String::new();
-    loop {
-        progress(&format!("{name}: tau on grid {side}{missed}"), 0, 1);
-        let grid = DirectionGrid::new(side).map_err(|e| anyhow!("{e:?}"))?;
-        let mut values = vec![0.0f32; grid.cells() as usize];
-        rays += bake_tau(
-            &alone.vis,
-            alone.lo,
-            alone.hi,
-            grid,
-            &settings.tau,
-            &mut values,
-        );
-        // The check: the cross-section (1 - tau) A, which predictions of the intercepted
-        // power multiply by, relative to itself (or to 5% of the box's shadow when the
-        // contents cast less), against estimates with more rays than the cells'.
-        let mut error = 0.0f32;
-        for k in 0..settings.tau.checks {
-            let d = uniform_direction(settings.tau.seed, k, 0xC4EC);
-            let e = tau(
-                &alone.vis,
-                alone.lo,
-                alone.hi,
-                d,
-                settings.tau_check_rays,
-                hash3(settings.tau.seed, k, 0xC4ED),
-            );
-            rays += e.rays as u64;
-            let pred = interpolate_tau(&grid, &values, alone.lo, alone.hi, d);
-            error = error.max((pred - e.tau).abs() / (1.0 - e.tau).max(0.05));
-        }
-        let met = error <= settings.tau.target;
-        missed = format!(", {side}: {:.1}% off", 100.0 * error);
-        if met || side * 2 > settings.max_tau_side {
-            return Ok(Tau {
-                grid,
-                values,
-                error,
-                met,
-                rays,
-            });
         }
         side *= 2;
     }

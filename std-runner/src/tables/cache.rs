@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 const MAGIC: &[u8; 8] = b"HIRADTBL";
 
 /// Changes whenever what a bake computes changes, so that older entries miss.
-const BAKE_VERSION: u32 = 1;
+const BAKE_VERSION: u32 = 2;
 
 /// A folder of cached tables.
 #[derive(Clone, Debug)]
@@ -146,7 +146,7 @@ fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTable
         .collect();
     let [tau, albedo, _] = record.lengths();
     let values = record.values() as usize;
-    let per_cell = albedo as usize;
+    let per_cell = (record.incoming_side as usize).pow(2) * record.bands as usize;
     if floats.len() != values + 2 * per_cell {
         return None;
     }

@@ -39,7 +39,7 @@ pub fn write_directions(
                     view.tau(d),
                     view.area(d),
                     view.shadow(d),
-                    t.albedo[i],
+                    view.albedo(d, b),
                     view.scattered(d, b),
                     t.absorbed[i],
                     t.residual[i]

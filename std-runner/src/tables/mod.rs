@@ -10,8 +10,11 @@ mod bake;
 mod cache;
 mod check;
 mod export;
+mod intercept;
 mod original;
+mod plot;
 mod sample;
+mod tau_bake;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
@@ -22,6 +25,7 @@ pub use cache::{Cache, Key};
 pub use check::{CheckReport, check};
 pub use export::{write_bidirectional, write_directions};
 pub use original::{Alone, Lit};
+pub use plot::{map_pixel, picture, plot_sun, write_plots};
 pub use sample::{Sample, sample_at};
 
 use glam::Vec3;
@@ -48,16 +52,19 @@ pub struct OriginalTables {
     pub tau_grid: DirectionGrid,
     /// `tau` per cell of `tau_grid` (dimensionless, 0..=1).
     pub tau: Vec<f32>,
-    /// Largest error of the interpolated cross-section `(1 - tau) A` at the bake's check
-    /// directions, relative to it (or to 5% of `A` where the contents cast less).
+    /// Per cell of `tau_grid` and band: of the power intercepted, the share scattered out
+    /// (dimensionless, 0..=1).
+    pub albedo: Vec<f32>,
+    /// Largest error of the interpolated cross-section `(1 - tau) A` or scattered
+    /// cross-section at the bake's check directions, relative to itself (or to 5% of `A`
+    /// where the contents cast less).
     pub tau_error: f32,
     /// Grid of incoming directions of the phase table.
     pub incoming: DirectionGrid,
     /// Grid of outgoing directions of the bidirectional phase table.
     pub outgoing: DirectionGrid,
-    /// Per incoming cell and band: the albedo (see [`PhaseTable`]).
-    pub albedo: Vec<f32>,
-    /// Per incoming cell, outgoing cell and band: the response (1/(m^2 sr)).
+    /// Per incoming cell, outgoing cell and band: the response (1/(m^2 sr), see
+    /// [`PhaseTable`]).
     pub response: Vec<f32>,
     /// Per incoming cell and band: the absorbed fraction.
     pub absorbed: Vec<f32>,
@@ -87,14 +94,15 @@ pub struct OriginalTables {
 impl OriginalTables {
     /// The tables as the core reads them, or why they are not sound.
     pub fn try_view(&self) -> Result<DirectionalTables<'_>, hirad_core::tables::phase::TableError> {
-        let phase = PhaseTable::new(
-            self.incoming,
-            self.outgoing,
-            self.bands,
+        let phase = PhaseTable::new(self.incoming, self.outgoing, self.bands, &self.response)?;
+        DirectionalTables::new(
+            self.lo,
+            self.hi,
+            self.tau_grid,
+            &self.tau,
             &self.albedo,
-            &self.response,
-        )?;
-        DirectionalTables::new(self.lo, self.hi, self.tau_grid, &self.tau, phase)
+            phase,
+        )
     }
 
     /// The tables as the core reads them (a bake or a cache entry is always sound).

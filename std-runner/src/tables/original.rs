@@ -125,8 +125,29 @@ impl Alone {
         settings: &Settings,
         exec: &mut RayonExecutor,
     ) -> Result<Lit> {
+        let sun = scene::light(source, &[1.0; MAX_BANDS][..self.bands()]);
+        self.solve_lights(vec![sun], Vec::new(), settings, exec)
+    }
+
+    /// Solves the original under the suns `suns` and sky directions `sky` (its own frame).
+    pub fn solve_lights(
+        &self,
+        suns: Vec<scene::LightData>,
+        sky: Vec<scene::LightData>,
+        settings: &Settings,
+        exec: &mut RayonExecutor,
+    ) -> Result<Lit> {
+        let box_area = |l: &scene::LightData| {
+            hirad_core::tables::tau::projected_area(self.lo, self.hi, l.towards)
+        };
+        if suns.iter().chain(&sky).all(|l| box_area(l) <= 0.0) {
+            // Every light runs along the plane of a flat original: nothing is lit (the
+            // solver would refuse a scene that receives no power).
+            return self.dark();
+        }
         let mut s = self.scene.clone();
-        s.suns = vec![scene::light(source, &[1.0; MAX_BANDS][..self.bands()])];
+        s.suns = suns;
+        s.sky = sky;
         let bytes = scene::compile(&s).map_err(|e| anyhow!("{e}"))?;
         let view = scene::read_image(&bytes).map_err(|e| anyhow!("{e}"))?;
         let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
@@ -155,6 +176,35 @@ impl Alone {
             ));
         }
         Ok(Lit { table, stats })
+    }
+}
+
+impl Alone {
+    /// The solve of an original that no light reaches: every value 0.
+    fn dark(&self) -> Result<Lit> {
+        let bands = self.bands();
+        let two_sided = self.scene.materials.iter().any(|m| m.data.two_sided);
+        let mut table = ResultsTable::new(bands, two_sided);
+        let zeros = [0.0f32; MAX_BANDS];
+        for p in 0..self.polygons.len() {
+            let two = self.scene.materials[self.materials[p] as usize]
+                .data
+                .two_sided;
+            let back: &[f32] = if two { &zeros[..bands] } else { &[] };
+            table
+                .push(&hirad_core::sink::PolygonResult {
+                    id: p as u64,
+                    area: self.areas[p],
+                    two_sided: two,
+                    radiosity: [&zeros[..bands], back],
+                    irradiance: [&zeros[..bands], back],
+                })
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        Ok(Lit {
+            table,
+            stats: Stats::default(),
+        })
     }
 }
 

@@ -1,7 +1,8 @@
 //! Tables of a single two-sided leaf against their closed forms: under a sun of 1 W/m^2 at
-//! cosine `c` to its normal the leaf intercepts `a |c|`, its lit side leaves `rho |c|` and its
-//! other side `tau |c|` (nothing else is there to light it), and an observer sees the side
-//! facing them, at radiance `B / pi` over the area `a |cosine|`.
+//! cosine `c` to its normal the leaf intercepts `a |c|`, its lit side leaves `rho |c|` (the
+//! front's or the back's reflectance: they differ) and its other side `tau |c|` (nothing else
+//! is there to light it), and an observer sees the side facing them, at radiance `B / pi`
+//! over the area `a |cosine|`.
 
 use super::{OriginalTables, TableSettings, bake_original};
 use crate::cli::instanced_originals;
@@ -14,13 +15,19 @@ use hirad_core::sampling::{hash3, unit2};
 use hirad_core::tables::bake::TauSettings;
 
 const RHO: [f32; 2] = [0.1, 0.45];
+const RHO_BACK: [f32; 2] = [0.16, 0.3];
 const TAU: [f32; 2] = [0.05, 0.4];
+
+/// The reflectance of the side of a leaf of normal `n` that faces `d`.
+fn rho_facing(n: Vec3, d: Vec3, b: usize) -> f32 {
+    if n.dot(d) >= 0.0 { RHO[b] } else { RHO_BACK[b] }
+}
 
 /// A scene whose only original is one square leaf of side `side` with normal `n`, placed
 /// once.
 pub(super) fn one_leaf(n: Vec3, side: f32) -> Scene {
     let mut scene = Scene::new(2);
-    let m = two_sided(&mut scene, "leaf", &RHO, &RHO, &TAU);
+    let m = two_sided(&mut scene, "leaf", &RHO, &RHO_BACK, &TAU);
     let (u, v) = crate::generate::shapes::frame(n);
     let h = side * 0.5;
     let mut leaf = Cluster::named("leaf");
@@ -89,12 +96,18 @@ fn a_leafs_tables_match_their_closed_forms() {
         for (i, r) in t.residual.iter().enumerate() {
             assert!(r.abs() < 0.005, "leaf {k}: residual {r} at {i}");
         }
-        // The albedo is rho + tau in every cell (both sides reflect alike).
-        for c in 0..t.incoming.cells() {
-            for b in 0..2 {
-                let want = RHO[b] + TAU[b];
-                let got = view.phase().albedo_at(c, b);
-                let d = t.incoming.direction(c);
+        // The albedo is rho + tau of the lit side in every cell of the tau grid where the
+        // leaf is met (none where it is seen edge-on).
+        let mut met = 0;
+        for c in 0..t.tau_grid.cells() {
+            let d = t.tau_grid.direction(c);
+            if t.tau[c as usize] > 0.99 {
+                continue;
+            }
+            met += 1;
+            for (b, tau) in TAU.iter().enumerate() {
+                let want = rho_facing(n, d, b) + tau;
+                let got = view.albedo_values()[c as usize * 2 + b];
                 assert!(
                     (got - want).abs() < 0.02 * want,
                     "leaf {k} cell {c}: {got} vs {want}; cos {} shadow {} area {}",
@@ -104,14 +117,15 @@ fn a_leafs_tables_match_their_closed_forms() {
                 );
             }
         }
+        assert!(met * 2 > t.tau_grid.cells(), "leaf {k}: met in {met} cells");
         for j in 0..40 {
             let source = direction(j, 100 + k);
             let observer = direction(j, 200 + k);
             let (ci, co) = (n.dot(source), n.dot(observer));
             // Scattered power away from the leaf's plane (where |cos| folds).
             if ci.abs() > 0.2 {
-                for b in 0..2 {
-                    let want = (RHO[b] + TAU[b]) * a * ci.abs();
+                for (b, tau) in TAU.iter().enumerate() {
+                    let want = (rho_facing(n, source, b) + tau) * a * ci.abs();
                     let got = view.scattered(source, b);
                     assert!(
                         (got - want).abs() < 0.02 * want,
@@ -121,11 +135,11 @@ fn a_leafs_tables_match_their_closed_forms() {
             }
             // The bidirectional intensity, away from where the side seen or lit flips.
             if ci.abs() > 0.8 && co.abs() > 0.6 {
-                for b in 0..2 {
+                for (b, &tau) in TAU.iter().enumerate() {
                     let seen = if (ci > 0.0) == (co > 0.0) {
-                        RHO[b]
+                        rho_facing(n, source, b)
                     } else {
-                        TAU[b]
+                        tau
                     };
                     let want = seen * ci.abs() / std::f32::consts::PI * a * co.abs();
                     let got = view.intensity(source, observer, b);
@@ -180,4 +194,67 @@ fn originals_come_after_the_originals_they_hold() {
     });
     scene.root.children[0].instance.as_mut().unwrap().original = 1;
     assert_eq!(instanced_originals(&scene), vec![0, 2, 1]);
+}
+
+/// The colour-map value (0..=1) whose viridis colour is nearest to `px`.
+fn viridis_value(px: &[u8]) -> f32 {
+    use crate::output::colormap::viridis_u8;
+    let dist = |t: f32| {
+        let c = viridis_u8(t);
+        (0..3)
+            .map(|i| (c[i] as i32 - px[i] as i32).pow(2))
+            .sum::<i32>()
+    };
+    (0..=1000)
+        .map(|k| k as f32 / 1000.0)
+        .min_by_key(|&t| dist(t))
+        .unwrap()
+}
+
+#[test]
+fn the_plot_draws_tau_and_both_phase_forms_at_their_directions() {
+    use crate::output::colorbar::Scale;
+    // A level leaf whose front (up) and back reflect differently, one square metre.
+    let t = bake(&one_leaf(Vec3::Z, 1.0));
+    let b = 1;
+    let (w, h, rgb) = super::picture(&t, b, "nir");
+    assert_eq!(rgb.len(), (w * h * 3) as usize);
+    let at = |panel: u32, az: f32, el: f32| {
+        let (x, y) = super::map_pixel(panel, az, el);
+        let i = ((y * w + x) * 3) as usize;
+        viridis_value(&rgb[i..i + 3])
+    };
+    // tau: the leaf fills its box, so nothing passes from above or below.
+    for (az, el) in [(10.0, 80.0), (200.0, -70.0), (300.0, 30.0)] {
+        assert!(at(0, az, el) < 0.02, "tau at {az} {el}: {}", at(0, az, el));
+    }
+    // Scattered power: (rho of the lit side + tau) x |cos|, on a scale whose top is the
+    // round value above the largest, the front's from the zenith.
+    let top = Scale::new(f64::from(RHO[b] + TAU[b])).top as f32;
+    for (el, rho) in [
+        (89.0f32, RHO[b]),
+        (-89.0, RHO_BACK[b]),
+        (40.0, RHO[b]),
+        (-50.0, RHO_BACK[b]),
+    ] {
+        let want = (rho + TAU[b]) * el.to_radians().sin().abs() / top;
+        let got = at(1, 123.0, el);
+        assert!(
+            (got - want).abs() < 0.02,
+            "scattered at el {el}: {got} vs {want}"
+        );
+    }
+    // Bidirectional, sun at elevation 60 on the front: the front is seen from above at
+    // radiance rho E / pi, the back from below at tau E / pi.
+    let e = 60f32.to_radians().sin();
+    let up = RHO[b] * e / std::f32::consts::PI;
+    let top = Scale::new(f64::from(up)).top as f32;
+    for (el, seen) in [(85.0f32, RHO[b]), (-85.0, TAU[b]), (-30.0, TAU[b])] {
+        let want = seen * e / std::f32::consts::PI * el.to_radians().sin().abs() / top;
+        let got = at(2, 250.0, el);
+        assert!(
+            (got - want).abs() < 0.03,
+            "intensity at el {el}: {got} vs {want}"
+        );
+    }
 }
