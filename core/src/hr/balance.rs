@@ -320,7 +320,7 @@ fn back_direct<V: Visibility + ?Sized>(
         let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, k)));
         let towards = Vec3::from(src.towards);
         let c = -normal.dot(towards);
-        if c <= 0.0 {
+        if c <= 0.0 || st.settings.sun_sides & 2 == 0 {
             continue;
         }
         let seed = hash3(e.0, k, 0xBAC);

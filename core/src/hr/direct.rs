@@ -212,7 +212,7 @@ fn prepare<V: Visibility + ?Sized>(
             let towards = Vec3::from(src.towards);
             let c = normal.dot(towards);
             let side = if c > 0.0 { 0 } else { 1 };
-            if c == 0.0 || side >= sides {
+            if c == 0.0 || side >= sides || st.settings.sun_sides & (1 << side) == 0 {
                 continue;
             }
             let seed = hash3(e.0, k, 0x5A11);
@@ -601,7 +601,7 @@ fn sky_light<V: Visibility + ?Sized>(
         let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, k)));
         let c = normal.dot(Vec3::from(src.towards));
         let side = if c > 0.0 { 0 } else { 1 };
-        if c == 0.0 || side >= sides {
+        if c == 0.0 || side >= sides || st.settings.sun_sides & (1 << side) == 0 {
             return (0.0, side, c);
         }
         let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);

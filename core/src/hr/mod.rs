@@ -91,6 +91,11 @@ pub struct Settings {
     /// at least once and goes on (up to 4 passes in all) while a pass still moves the light
     /// leaving the surfaces by more than [`relight::SETTLED`] of what enters.
     pub final_passes: u32,
+    /// Sides of the polygons that suns and sky light directly: bit 0 the fronts, bit 1 the
+    /// backs ([`Settings::BOTH_SIDES`], the default: both, as light does). `hirad tables`
+    /// lights one side at a time to learn how an original scatters the light that falls on
+    /// the fronts and on the backs of its leaves, which reflect differently.
+    pub sun_sides: u8,
 }
 
 /// Most final gather passes.
@@ -99,6 +104,8 @@ pub const MAX_FINAL_PASSES: u32 = 4;
 impl Settings {
     /// [`Settings::final_rays`] or [`Settings::final_passes`] chosen from the scene.
     pub const AUTO: u32 = u32::MAX;
+    /// [`Settings::sun_sides`]: suns and sky light fronts and backs.
+    pub const BOTH_SIDES: u8 = 3;
     /// Most final gather rays per side one may ask for.
     pub const MAX_FINAL_RAYS: u32 = 1 << 20;
 
@@ -132,6 +139,11 @@ impl Settings {
                 "final_rays must lie in 0..=1048576 (or be Settings::AUTO)",
             ));
         }
+        if !(1..=Self::BOTH_SIDES).contains(&self.sun_sides) {
+            return Err(HrError::Settings(
+                "sun_sides must lie in 1..=3 (bit 0 fronts, bit 1 backs)",
+            ));
+        }
         Ok(())
     }
 }
@@ -149,6 +161,7 @@ impl Default for Settings {
             max_children: 8,
             final_rays: Settings::AUTO,
             final_passes: Settings::AUTO,
+            sun_sides: Settings::BOTH_SIDES,
         }
     }
 }

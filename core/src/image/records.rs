@@ -222,9 +222,10 @@ pub struct TableRecord {
     pub lo: [f32; 3],
     /// Upper corner.
     pub hi: [f32; 3],
-    /// First value of `tau` (`tau_side^2` values) in the pool; the albedo (`tau_side^2 x
-    /// bands`, on the `tau` grid) and the response (`incoming_side^2 x outgoing_side^2 x
-    /// bands`) follow it.
+    /// First value of `tau` (`tau_side^2` values) in the pool; the albedo (`tau_side^2 x 2
+    /// x bands`, on the `tau` grid, per side lit), the shares by side lit (`incoming_side^2
+    /// x 2 x bands`) and the response (`incoming_side^2 x outgoing_side^2 x 2 x bands`)
+    /// follow it.
     pub first: u64,
     /// Largest relative error of the cross-section at the bake's check directions.
     pub tau_error: f32,
@@ -240,14 +241,16 @@ pub struct TableRecord {
 pub const TABLE_MET: u32 = 1;
 
 impl TableRecord {
-    /// Values of `tau`, of the albedo and of the response, in that order.
-    pub fn lengths(&self) -> [u64; 3] {
+    /// Values of `tau`, of the albedo, of the shares by side lit and of the response, in
+    /// that order.
+    pub fn lengths(&self) -> [u64; 4] {
         let n = |s: u32| s as u64 * s as u64;
         let bands = self.bands as u64;
         [
             n(self.tau_side),
-            n(self.tau_side) * bands,
-            n(self.incoming_side) * n(self.outgoing_side) * bands,
+            n(self.tau_side) * 2 * bands,
+            n(self.incoming_side) * 2 * bands,
+            n(self.incoming_side) * n(self.outgoing_side) * 2 * bands,
         ]
     }
 

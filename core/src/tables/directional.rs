@@ -11,7 +11,7 @@
 //! per unit irradiance.
 
 use super::grid::DirectionGrid;
-use super::phase::{PhaseTable, TableError, check_values};
+use super::phase::{PhaseTable, TableError, check_values, side_lit};
 use super::tau::{interpolate_scattered, interpolate_tau, projected_area};
 use glam::Vec3;
 
@@ -26,8 +26,10 @@ pub struct DirectionalTables<'a> {
     tau_grid: DirectionGrid,
     /// `tau` per cell (0..=1).
     tau: &'a [f32],
-    /// `[cell * bands + band]` on the `tau` grid: of the power the contents intercept from a
-    /// sun in that cell, the fraction that leaves the box scattered (0..=1).
+    /// `[(cell * 2 + side) * bands + band]` on the `tau` grid: of the power the contents
+    /// intercept from a sun in that cell, the fraction that leaves the box scattered after
+    /// falling on the fronts (side 0) or on the backs (side 1) of the polygons (0..=1 each,
+    /// their sum too).
     albedo: &'a [f32],
     /// The phase table.
     phase: PhaseTable<'a>,
@@ -51,7 +53,7 @@ impl<'a> DirectionalTables<'a> {
         check_values(tau, tau_grid.cells() as u64, 1.0)?;
         check_values(
             albedo,
-            tau_grid.cells() as u64 * phase.bands() as u64,
+            tau_grid.cells() as u64 * 2 * phase.bands() as u64,
             1.0 + 1e-3,
         )?;
         let shadow_integral = (0..tau_grid.cells())
@@ -87,7 +89,7 @@ impl<'a> DirectionalTables<'a> {
         self.tau
     }
 
-    /// The albedo at the cells of the `tau` grid, `[cell * bands + band]`.
+    /// The albedo at the cells of the `tau` grid, `[(cell * 2 + side) * bands + band]`.
     pub fn albedo_values(&self) -> &'a [f32] {
         self.albedo
     }
@@ -113,19 +115,26 @@ impl<'a> DirectionalTables<'a> {
     }
 
     /// Power scattered out of the box in band `band` for a sun of 1 W/m^2 towards `source`
-    /// (m^2): the scattered cross-section `albedo (1 - tau) A`, interpolated as a whole for
-    /// the reason `tau` is (see [`interpolate_tau`]).
-    pub fn scattered(&self, source: Vec3, band: usize) -> f32 {
+    /// (m^2), of the light that fell on side `side` of the polygons (0 fronts, 1 backs).
+    pub fn scattered_by(&self, source: Vec3, side: usize, band: usize) -> f32 {
+        let bands = self.phase.bands();
         interpolate_scattered(
             &self.tau_grid,
             self.tau,
             self.albedo,
-            self.phase.bands(),
-            band,
+            2 * bands,
+            side * bands + band,
             self.lo,
             self.hi,
             source,
         )
+    }
+
+    /// Power scattered out of the box in band `band` for a sun of 1 W/m^2 towards `source`
+    /// (m^2): the scattered cross-section `albedo (1 - tau) A`, interpolated as a whole for
+    /// the reason `tau` is (see [`interpolate_tau`]).
+    pub fn scattered(&self, source: Vec3, band: usize) -> f32 {
+        self.scattered_by(source, 0, band) + self.scattered_by(source, 1, band)
     }
 
     /// Of the power intercepted from a sun towards `source`, the fraction scattered out in
@@ -140,11 +149,20 @@ impl<'a> DirectionalTables<'a> {
     }
 
     /// Intensity leaving the box towards `observer` in band `band` for a sun of 1 W/m^2
-    /// towards `source` (m^2/sr), by the bidirectional response.
+    /// towards `source` (m^2/sr), by the bidirectional response: per side lit (see
+    /// [`side_lit`]), the response interpolated over the incoming cells where that side is
+    /// lit times the power scattered from that side, times the cross-section seen.
     pub fn intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
-        self.phase.response(source, observer, band)
-            * self.scattered(source, band)
-            * self.shadow(observer)
+        let total = self.scattered(source, band);
+        let mut sum = 0.0;
+        for side in 0..2 {
+            let s = self.scattered_by(source, side, band);
+            if !side_lit(s, total) {
+                continue;
+            }
+            sum += self.phase.response(source, observer, side, band) * s;
+        }
+        sum * self.shadow(observer)
     }
 
     /// The same by the uniform form: the scattered power leaves as if from a surface of

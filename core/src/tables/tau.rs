@@ -40,17 +40,18 @@ pub fn interpolate_tau(grid: &DirectionGrid, values: &[f32], lo: Vec3, hi: Vec3,
     (1.0 - shadow / area).clamp(0.0, 1.0)
 }
 
-/// The power a box's contents scatter out for a sun of 1 W/m^2 towards `d` (m^2): the
-/// scattered cross-section `albedo (1 - tau) A` interpolated from its values at the cell
-/// centres of `grid` (`tau` per cell, `albedo[cell * bands + band]`), as a whole for the
-/// reason [`interpolate_tau`] interpolates the cross-section.
+/// The power a box's contents scatter out for a sun of 1 W/m^2 towards `d` (m^2), or a
+/// part of it: the scattered cross-section `albedo (1 - tau) A` interpolated from its values
+/// at the cell centres of `grid` (`tau` per cell; `albedo[cell * stride + at]`, the share of
+/// the intercepted power that the part scatters out), as a whole for the reason
+/// [`interpolate_tau`] interpolates the cross-section.
 #[allow(clippy::too_many_arguments)]
 pub fn interpolate_scattered(
     grid: &DirectionGrid,
     tau: &[f32],
     albedo: &[f32],
-    bands: usize,
-    band: usize,
+    stride: usize,
+    at: usize,
     lo: Vec3,
     hi: Vec3,
     d: Vec3,
@@ -60,7 +61,7 @@ pub fn interpolate_scattered(
         .map(|&(c, w)| {
             let i = c as usize;
             let t = tau.get(i).copied().unwrap_or(1.0);
-            let a = albedo.get(i * bands + band).copied().unwrap_or(0.0);
+            let a = albedo.get(i * stride + at).copied().unwrap_or(0.0);
             w * a * (1.0 - t) * projected_area(lo, hi, grid.direction(c))
         })
         .sum::<f32>()

@@ -109,30 +109,52 @@ fn the_surfaces_sum_agrees_with_an_observers_rays() {
 #[test]
 fn tables_refuse_storage_that_does_not_fit() {
     let g = DirectionGrid::new(2).unwrap();
-    let ok = vec![0.5f32; 4 * 2];
-    let bi = vec![0.1f32; 4 * 4 * 2];
-    assert!(PhaseTable::new(g, g, 2, &bi).is_ok());
-    assert_eq!(PhaseTable::new(g, g, 0, &bi), Err(TableError::Bands));
-    assert_eq!(PhaseTable::new(g, g, 9, &bi), Err(TableError::Bands));
+    // Two bands, two sides lit: 4 cells x 2 x 2 albedos, 4 x 4 x 2 x 2 responses.
+    let ok = vec![0.25f32; 4 * 2 * 2];
+    let bi = vec![0.1f32; 4 * 4 * 2 * 2];
+    let shares = vec![0.5f32; 4 * 2 * 2];
+    assert!(PhaseTable::new(g, g, 2, &shares, &bi).is_ok());
     assert_eq!(
-        PhaseTable::new(g, g, 2, &bi[..31]),
+        PhaseTable::new(g, g, 0, &shares, &bi),
+        Err(TableError::Bands)
+    );
+    assert_eq!(
+        PhaseTable::new(g, g, 9, &shares, &bi),
+        Err(TableError::Bands)
+    );
+    assert_eq!(
+        PhaseTable::new(g, g, 2, &shares, &bi[..63]),
         Err(TableError::Length {
-            expected: 32,
-            given: 31
+            expected: 64,
+            given: 63
         })
     );
     let mut neg = bi.clone();
     neg[31] = -1.0;
     assert_eq!(
-        PhaseTable::new(g, g, 2, &neg),
+        PhaseTable::new(g, g, 2, &shares, &neg),
         Err(TableError::Value { index: 31 })
     );
     neg[31] = f32::INFINITY;
     assert_eq!(
-        PhaseTable::new(g, g, 2, &neg),
+        PhaseTable::new(g, g, 2, &shares, &neg),
         Err(TableError::Value { index: 31 })
     );
-    let phase = PhaseTable::new(g, g, 2, &bi).unwrap();
+    // The shares by side lit: one value per incoming cell, side and band, each a fraction.
+    assert_eq!(
+        PhaseTable::new(g, g, 2, &shares[..15], &bi),
+        Err(TableError::Length {
+            expected: 16,
+            given: 15
+        })
+    );
+    let mut bad = shares.clone();
+    bad[3] = 1.5;
+    assert_eq!(
+        PhaseTable::new(g, g, 2, &bad, &bi),
+        Err(TableError::Value { index: 3 })
+    );
+    let phase = PhaseTable::new(g, g, 2, &shares, &bi).unwrap();
     let tau = vec![0.5f32; 4];
     let new = |lo, hi, tau: &[f32], albedo: &[f32]| {
         DirectionalTables::new(lo, hi, g, tau, albedo, phase).map(|_| ())
@@ -149,10 +171,10 @@ fn tables_refuse_storage_that_does_not_fit() {
     );
     // The albedo lives on the tau grid, a value per cell and band, each a fraction.
     assert_eq!(
-        new(Vec3::ZERO, Vec3::ONE, &tau, &ok[..7]),
+        new(Vec3::ZERO, Vec3::ONE, &tau, &ok[..15]),
         Err(TableError::Length {
-            expected: 8,
-            given: 7
+            expected: 16,
+            given: 15
         })
     );
     let mut bad = ok.clone();
@@ -176,12 +198,17 @@ fn the_uniform_form_sends_out_what_is_scattered() {
     let tau: Vec<f32> = (0..g.cells())
         .map(|c| 0.3 + 0.4 * g.direction(c).z.abs())
         .collect();
+    // Fronts scatter more when lit from +z, backs from -z.
     let albedo: Vec<f32> = (0..g.cells())
-        .map(|c| 0.2 + 0.1 * g.direction(c).x)
+        .flat_map(|c| {
+            let d = g.direction(c);
+            [0.1 + 0.05 * d.x + 0.05 * d.z, 0.1 - 0.05 * d.z]
+        })
         .collect();
     let out = DirectionGrid::new(4).unwrap();
-    let response = vec![0.05f32; (g.cells() * out.cells()) as usize];
-    let phase = PhaseTable::new(g, out, 1, &response).unwrap();
+    let response = vec![0.05f32; (g.cells() * out.cells() * 2) as usize];
+    let shares = vec![0.5f32; (g.cells() * 2) as usize];
+    let phase = PhaseTable::new(g, out, 1, &shares, &response).unwrap();
     let t = DirectionalTables::new(lo, hi, g, &tau, &albedo, phase).unwrap();
     for k in 0..5 {
         let source = unit(k, 71);
@@ -202,7 +229,7 @@ fn the_uniform_form_sends_out_what_is_scattered() {
         let near: Vec<f32> = g
             .weights(source)
             .iter()
-            .map(|&(c, _)| albedo[c as usize])
+            .map(|&(c, _)| albedo[2 * c as usize] + albedo[2 * c as usize + 1])
             .collect();
         let (lo_a, hi_a) = near
             .iter()
@@ -215,5 +242,53 @@ fn the_uniform_form_sends_out_what_is_scattered() {
         let observer = unit(k, 72);
         let i = t.intensity(source, observer, 0);
         assert!((i - 0.05 * want * t.shadow(observer)).abs() < 1e-5 * (1.0 + i));
+    }
+}
+
+#[test]
+fn a_sides_response_is_interpolated_over_the_cells_where_that_side_is_lit() {
+    // Fronts lit from the upper hemisphere only: there their response is 0.3 (0 below, where
+    // it is undefined); backs the other way round, response 0.1.
+    let g = DirectionGrid::new(8).unwrap();
+    let out = DirectionGrid::new(4).unwrap();
+    let mut shares = Vec::new();
+    let mut response = vec![0.0f32; (g.cells() * out.cells() * 2) as usize];
+    for c in 0..g.cells() {
+        let up = g.direction(c).z > 0.0;
+        shares.extend(if up { [1.0, 0.0] } else { [0.0, 1.0] });
+        for o in 0..out.cells() {
+            let at = ((c * out.cells() + o) * 2) as usize;
+            if up {
+                response[at] = 0.3;
+            } else {
+                response[at + 1] = 0.1;
+            }
+        }
+    }
+    let phase = PhaseTable::new(g, out, 1, &shares, &response).unwrap();
+    for k in 0..200 {
+        let source = unit(k, 91);
+        let observer = unit(k, 92);
+        // Near the equator the cells around mix both hemispheres; a side's response stays
+        // its own wherever one of them has it lit.
+        let lit_up = g
+            .weights(source)
+            .iter()
+            .any(|&(c, w)| w > 0.0 && g.direction(c).z > 0.0);
+        let lit_down = g
+            .weights(source)
+            .iter()
+            .any(|&(c, w)| w > 0.0 && g.direction(c).z <= 0.0);
+        let front = phase.response(source, observer, 0, 0);
+        let back = phase.response(source, observer, 1, 0);
+        let want = |lit: bool, r: f32| if lit { r } else { 0.0 };
+        assert!(
+            (front - want(lit_up, 0.3)).abs() < 1e-6,
+            "{source}: {front}"
+        );
+        assert!(
+            (back - want(lit_down, 0.1)).abs() < 1e-6,
+            "{source}: {back}"
+        );
     }
 }

@@ -27,15 +27,17 @@ pub struct Args {
     /// leaving the box as well at a fifth of the time).
     #[arg(long, default_value_t = 0)]
     pub final_rays: u32,
-    /// Largest error of the tau table's cross-section (1 - tau) A at check directions,
-    /// relative to it: the intercepted power that scattering is predicted from.
+    /// Largest error of the tau grid's cross-section (1 - tau) A and scattered
+    /// cross-section at check directions, relative to each: the intercepted and scattered
+    /// power.
     #[arg(long, default_value_t = 0.01)]
     pub tau_target: f32,
     /// Largest side of the tau grid (rays only; the cells grow fourfold per doubling).
     #[arg(long, default_value_t = 128)]
     pub max_tau_side: u32,
-    /// Largest side of the grid of incoming directions (side x side suns, one solve each).
-    #[arg(long, default_value_t = 16)]
+    /// Largest side of the grid of incoming directions (rays only; the phase table holds
+    /// its cells times the outgoing grid's).
+    #[arg(long, default_value_t = 32)]
     pub max_side: u32,
     /// Write the scene with the tables as a binary image (.hirb), for `solve --method hi`
     /// and for embedded callers.
@@ -62,7 +64,7 @@ pub struct Args {
     /// Only the originals with these names (repeatable; default: every instanced original).
     #[arg(long = "original", value_name = "NAME")]
     pub originals: Vec<String>,
-    /// Largest side of the grid of outgoing directions (rays only).
+    /// Largest side of the grid of outgoing directions (side x side suns, one solve each).
     #[arg(long, default_value_t = 32)]
     pub max_out_side: u32,
     /// Folder of the table cache (default: $HIRAD_CACHE, else $XDG_CACHE_HOME/hirad/tables,
@@ -325,7 +327,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     if !unmet.is_empty() {
         return Err(crate::exit::not_right(anyhow::anyhow!(
-            "the tables of {} did not meet their error targets on the finest grids allowed (see above; --max-side)",
+            "the tables of {} did not meet their error targets on the finest grids allowed (see above; --max-side, --max-out-side, --max-tau-side)",
             unmet.join(", ")
         )));
     }

@@ -6,6 +6,7 @@
 use super::OriginalTables;
 use super::intercept::EscapeWeights;
 use super::original::Alone;
+use super::response::{PhaseValues, Returns, phase_values};
 use super::sample::{Sample, Visibilities, sample_at};
 use super::tau_bake::bake_tau;
 use crate::scene::Scene;
@@ -17,7 +18,7 @@ use hirad_core::limits::MAX_BANDS;
 use hirad_core::sampling::{hash3, unit2};
 use hirad_core::tables::bake::TauSettings;
 use hirad_core::tables::grid::{DirectionGrid, MAX_SIDE};
-use hirad_core::tables::tau::interpolate_tau;
+use hirad_core::tables::tau::{interpolate_tau, tau};
 use std::time::Instant;
 
 /// How tables are made.
@@ -85,7 +86,7 @@ impl Default for TableSettings {
             solve,
             max_tau_side: 128,
             first_side: 4,
-            max_side: 16,
+            max_side: 32,
             first_out_side: 8,
             max_out_side: 32,
             out_rays: 4,
@@ -98,6 +99,10 @@ impl Default for TableSettings {
         }
     }
 }
+
+/// Rays along each side of the `tau` estimate at an incoming cell's centre (its energy
+/// check; 65,536 rays, a binomial noise of at most 0.002).
+const TAU_CHECK_RAYS: u32 = 256;
 
 /// A direction drawn uniformly on the sphere from `(seed, k, salt)`.
 pub fn uniform_direction(seed: u32, k: u32, salt: u32) -> Vec3 {
@@ -215,7 +220,6 @@ pub fn bake_alone(
     // The outgoing grid: the check suns' light, measured on the grid and interpolated at
     // the outgoing check directions.
     let mut out_side = settings.first_out_side.min(settings.max_out_side);
-    let seen;
     let mut out_tried = Vec::new();
     let mut missed = String::new();
     loop {
@@ -249,62 +253,52 @@ pub fn bake_alone(
         out_tried.push((out_side, worst));
         if worst <= settings.intensity_target || out_side * 2 > settings.max_out_side {
             progress(&format!("{name}: outgoing grid {out_side}{missed}"), 1, 1);
-            seen = this;
             break;
         }
         out_side *= 2;
     }
     let outgoing = DirectionGrid::new(out_side).map_err(|e| anyhow!("{e:?}"))?;
 
-    // The incoming grid.
+    // The light every polygon side sends towards each outgoing cell, by a solve there.
+    let what = format!("{name}: suns on the outgoing grid {out_side}");
+    let returns = Returns::solve(alone, outgoing, settings, exec, &mut |done, total| {
+        progress(&what, done, total)
+    })?;
+    solves += outgoing.cells();
+    // `tau` at an incoming cell's centre by its own rays (the energy check's uncollided part).
+    let tau_at = |d: Vec3| {
+        let seed = hash3(
+            settings.tau.seed,
+            d.x.to_bits(),
+            d.y.to_bits() ^ d.z.to_bits(),
+        );
+        tau(&alone.vis, alone.lo, alone.hi, d, TAU_CHECK_RAYS, seed).tau
+    };
+
+    // The incoming grid, rays only.
     let mut side = settings.first_side.min(settings.max_side);
     let mut tried = Vec::new();
     loop {
+        progress(&format!("{name}: incoming grid {side}"), 0, 1);
         let incoming = DirectionGrid::new(side).map_err(|e| anyhow!("{e:?}"))?;
-        let n_in = incoming.cells() as usize;
-        let n_out = outgoing.cells() as usize;
-        let mut absorbed = vec![0.0f32; n_in * bands];
-        let mut residual = vec![0.0f32; n_in * bands];
-        let mut response = Vec::with_capacity(n_in * n_out * bands);
-        for c in 0..incoming.cells() {
-            progress(
-                &format!("{name}: suns on grid {side}"),
-                c as u64,
-                n_in as u64,
-            );
-            let s = sample_at(alone, incoming.direction(c), settings, exec)?;
-            solves += 1;
-            let values = s.intensity_grid(alone, outgoing, &seen);
-            // Per watt scattered (W), from the same solve as what leaves; predictions
-            // multiply by the scattered power from the tables on the `tau` grid, which are
-            // refined to their own target.
-            let scattered: Vec<f32> = (0..bands).map(|b| s.scattered[b] * s.area).collect();
-            for b in 0..bands {
-                let i = c as usize * bands + b;
-                absorbed[i] = s.absorbed[b];
-                let out: f64 = (0..n_out)
-                    .map(|o| values[o * bands + b] as f64)
-                    .sum::<f64>()
-                    * outgoing.solid_angle() as f64;
-                let out = if s.area > 0.0 {
-                    out as f32 / s.area
-                } else {
-                    0.0
-                };
-                residual[i] = 1.0 - s.tau - s.absorbed[b] - out;
-            }
-            for o in 0..n_out {
-                let d = outgoing.direction(o as u32);
-                for b in 0..bands {
-                    let j = per_shadow(values[o * bands + b], d);
-                    response.push(if scattered[b] > 0.0 {
-                        j / scattered[b]
-                    } else {
-                        0.0
-                    });
-                }
-            }
-        }
+        // The sun's reach on each polygon, finer than the outgoing grid's: it weighs every
+        // polygon's light in the response and closes the cell's energy.
+        let lit = Visibilities::new(
+            alone,
+            incoming,
+            settings.check_out_rays,
+            settings.seed ^ 0x11,
+        );
+        rays += lit.rays();
+        let values = phase_values(
+            alone, &weights, &returns, incoming, &lit, outgoing, &shadow, &tau_at,
+        );
+        let PhaseValues {
+            shares,
+            response,
+            absorbed,
+            residual,
+        } = values;
         let mut t = OriginalTables {
             name: name.clone(),
             index,
@@ -318,6 +312,7 @@ pub fn bake_alone(
             tau_error: tt.error,
             incoming,
             outgoing,
+            shares,
             response,
             absorbed,
             residual,

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 const MAGIC: &[u8; 8] = b"HIRADTBL";
 
 /// Changes whenever what a bake computes changes, so that older entries miss.
-const BAKE_VERSION: u32 = 2;
+const BAKE_VERSION: u32 = 4;
 
 /// A folder of cached tables.
 #[derive(Clone, Debug)]
@@ -144,7 +144,7 @@ fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTable
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
-    let [tau, albedo, _] = record.lengths();
+    let [tau, albedo, shares, _] = record.lengths();
     let values = record.values() as usize;
     let per_cell = (record.incoming_side as usize).pow(2) * record.bands as usize;
     if floats.len() != values + 2 * per_cell {
@@ -157,6 +157,7 @@ fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTable
         grid(record.outgoing_side)?,
     );
     let (tau_end, albedo_end) = (tau as usize, (tau + albedo) as usize);
+    let shares_end = albedo_end + shares as usize;
     let t = OriginalTables {
         name: name.to_string(),
         index,
@@ -170,7 +171,8 @@ fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTable
         incoming,
         outgoing,
         albedo: floats[tau_end..albedo_end].to_vec(),
-        response: floats[albedo_end..values].to_vec(),
+        shares: floats[albedo_end..shares_end].to_vec(),
+        response: floats[shares_end..values].to_vec(),
         absorbed: floats[values..values + per_cell].to_vec(),
         residual: floats[values + per_cell..].to_vec(),
         scattered_error: record.scattered_error,

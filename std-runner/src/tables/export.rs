@@ -8,8 +8,7 @@ use std::io::{self, Write};
 pub const HEADER: &str = "original,band,cell,x,y,z,solid_angle_sr,tau,area_m2,shadow_m2,albedo,scattered_m2,absorbed_fraction,energy_residual";
 
 /// Header of the bidirectional file.
-pub const BIDIRECTIONAL_HEADER: &str =
-    "original,band,in_cell,out_cell,out_x,out_y,out_z,response_per_m2_sr,intensity_m2_sr";
+pub const BIDIRECTIONAL_HEADER: &str = "original,band,in_cell,out_cell,out_x,out_y,out_z,response_front_per_m2_sr,response_back_per_m2_sr,intensity_m2_sr";
 
 /// One row per original, band and incoming cell: the direction towards the sun (the
 /// original's frame), the cell's solid angle, `tau` and the areas there, the albedo, the
@@ -50,8 +49,9 @@ pub fn write_directions(
     Ok(())
 }
 
-/// One row per original, band, incoming and outgoing cell: the response and the intensity
-/// towards the outgoing cell's centre for a sun of 1 W/m^2 at the incoming cell's centre.
+/// One row per original, band, incoming and outgoing cell: the responses to light falling
+/// on the fronts and on the backs, and the intensity towards the outgoing cell's centre for
+/// a sun of 1 W/m^2 at the incoming cell's centre.
 pub fn write_bidirectional(
     out: &mut dyn Write,
     tables: &[OriginalTables],
@@ -63,21 +63,20 @@ pub fn write_bidirectional(
         let phase = view.phase();
         for ci in 0..t.incoming.cells() {
             let source = t.incoming.direction(ci);
-            let shadow_in = view.shadow(source);
             for co in 0..t.outgoing.cells() {
                 let o = t.outgoing.direction(co);
-                let shadow_out = view.shadow(o);
                 for b in 0..t.bands {
-                    let r = phase.response_at(ci, co, b);
                     writeln!(
                         out,
-                        "{},{},{ci},{co},{},{},{},{r},{}",
+                        "{},{},{ci},{co},{},{},{},{},{},{}",
                         csv_name(&t.name),
                         band_label(names, b),
                         o.x,
                         o.y,
                         o.z,
-                        r * shadow_in * shadow_out
+                        phase.response_at(ci, co, 0, b),
+                        phase.response_at(ci, co, 1, b),
+                        view.intensity(source, o, b)
                     )?;
                 }
             }

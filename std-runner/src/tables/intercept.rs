@@ -77,8 +77,9 @@ pub struct Intercept {
     pub crossed: u32,
     /// Of those, rays that met a polygon.
     pub blocked: u32,
-    /// Sum over the blocked rays of the escape weight of the side they met, per band.
-    pub scattered: [f64; MAX_BANDS],
+    /// Sum over the blocked rays of the escape weight of the side they met, per side met
+    /// (0 fronts, 1 backs) and band.
+    pub scattered: [[f64; MAX_BANDS]; 2],
 }
 
 impl Intercept {
@@ -91,14 +92,19 @@ impl Intercept {
         }
     }
 
-    /// Of the power intercepted, the share scattered out in band `band` (0 when nothing is
-    /// intercepted).
-    pub fn albedo(&self, band: usize) -> f32 {
+    /// Of the power intercepted, the share scattered out in band `band` after falling on
+    /// side `side` (0 fronts, 1 backs) of the polygons (0 when nothing is intercepted).
+    pub fn albedo(&self, side: usize, band: usize) -> f32 {
         if self.blocked > 0 {
-            ((self.scattered[band] / self.blocked as f64) as f32).clamp(0.0, 1.0)
+            ((self.scattered[side][band] / self.blocked as f64) as f32).clamp(0.0, 1.0)
         } else {
             0.0
         }
+    }
+
+    /// Of the power intercepted, the share scattered out in band `band`.
+    pub fn total_albedo(&self, band: usize) -> f32 {
+        (self.albedo(0, band) + self.albedo(1, band)).min(1.0)
     }
 }
 
@@ -117,7 +123,7 @@ pub fn intercept(alone: &Alone, weights: &EscapeWeights, d: Vec3, g: u32, seed: 
             } else {
                 1
             };
-            for (s, w) in r.scattered.iter_mut().zip(weights.of(p, side)) {
+            for (s, w) in r.scattered[side].iter_mut().zip(weights.of(p, side)) {
                 *s += *w as f64;
             }
         }

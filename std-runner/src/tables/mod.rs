@@ -13,6 +13,7 @@ mod export;
 mod intercept;
 mod original;
 mod plot;
+mod response;
 mod sample;
 mod tau_bake;
 #[cfg(test)]
@@ -26,7 +27,7 @@ pub use check::{CheckReport, check};
 pub use export::{write_bidirectional, write_directions};
 pub use original::{Alone, Lit};
 pub use plot::{map_pixel, picture, plot_sun, write_plots};
-pub use sample::{Sample, sample_at};
+pub use sample::{Sample, sample_at, sample_sides};
 
 use glam::Vec3;
 use hirad_core::tables::directional::DirectionalTables;
@@ -63,7 +64,10 @@ pub struct OriginalTables {
     pub incoming: DirectionGrid,
     /// Grid of outgoing directions of the bidirectional phase table.
     pub outgoing: DirectionGrid,
-    /// Per incoming cell, outgoing cell and band: the response (1/(m^2 sr), see
+    /// Per incoming cell, side lit and band: the share of the scattered power that fell on
+    /// that side first (see [`PhaseTable`]).
+    pub shares: Vec<f32>,
+    /// Per incoming cell, outgoing cell, side lit and band: the response (1/(m^2 sr), see
     /// [`PhaseTable`]).
     pub response: Vec<f32>,
     /// Per incoming cell and band: the absorbed fraction.
@@ -94,7 +98,13 @@ pub struct OriginalTables {
 impl OriginalTables {
     /// The tables as the core reads them, or why they are not sound.
     pub fn try_view(&self) -> Result<DirectionalTables<'_>, hirad_core::tables::phase::TableError> {
-        let phase = PhaseTable::new(self.incoming, self.outgoing, self.bands, &self.response)?;
+        let phase = PhaseTable::new(
+            self.incoming,
+            self.outgoing,
+            self.bands,
+            &self.shares,
+            &self.response,
+        )?;
         DirectionalTables::new(
             self.lo,
             self.hi,
@@ -113,10 +123,12 @@ impl OriginalTables {
     /// The tables as the scene model and the image store them.
     pub fn to_scene(&self) -> crate::scene::Tables {
         use hirad_core::image::{TABLE_MET, TableRecord};
-        let mut values =
-            Vec::with_capacity(self.tau.len() + self.albedo.len() + self.response.len());
+        let mut values = Vec::with_capacity(
+            self.tau.len() + self.albedo.len() + self.shares.len() + self.response.len(),
+        );
         values.extend_from_slice(&self.tau);
         values.extend_from_slice(&self.albedo);
+        values.extend_from_slice(&self.shares);
         values.extend_from_slice(&self.response);
         crate::scene::Tables {
             original: self.index,
@@ -141,7 +153,7 @@ impl OriginalTables {
 
     /// Bytes of the tables' values (f32 each).
     pub fn bytes(&self) -> u64 {
-        4 * (self.tau.len() + self.albedo.len() + self.response.len()) as u64
+        4 * (self.tau.len() + self.albedo.len() + self.shares.len() + self.response.len()) as u64
     }
 
     /// Largest |residual| over the incoming cells, per band.

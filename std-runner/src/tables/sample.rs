@@ -7,6 +7,7 @@ use super::original::{Alone, Lit};
 use crate::solve::RayonExecutor;
 use anyhow::Result;
 use glam::Vec3;
+use hirad_core::hr::Settings;
 use hirad_core::limits::MAX_BANDS;
 use hirad_core::sampling::hash3;
 use hirad_core::tables::grid::DirectionGrid;
@@ -39,8 +40,24 @@ pub fn sample_at(
     settings: &TableSettings,
     exec: &mut RayonExecutor,
 ) -> Result<Sample> {
+    sample_sides(alone, source, settings, Settings::BOTH_SIDES, exec)
+}
+
+/// [`sample_at`] with the sun lighting only the sides of the polygons named by `sides` (see
+/// [`Settings::sun_sides`]).
+pub fn sample_sides(
+    alone: &Alone,
+    source: Vec3,
+    settings: &TableSettings,
+    sides: u8,
+    exec: &mut RayonExecutor,
+) -> Result<Sample> {
     let source = source.normalize();
-    let lit = alone.solve(source, &settings.solve, exec)?;
+    let solve = Settings {
+        sun_sides: sides,
+        ..settings.solve
+    };
+    let lit = alone.solve(source, &solve, exec)?;
     let area = projected_area(alone.lo, alone.hi, source);
     let t = tau(
         &alone.vis,

@@ -17,7 +17,7 @@ pub(super) struct Tau {
     pub grid: DirectionGrid,
     /// `tau` per cell.
     pub values: Vec<f32>,
-    /// Albedo per cell and band.
+    /// Albedo per cell, side lit and band.
     pub albedo: Vec<f32>,
     /// Largest relative error of the cross-section or of the scattered cross-section at the
     /// check directions.
@@ -63,7 +63,7 @@ pub(super) fn bake_tau(
         let values: Vec<f32> = cells.iter().map(Intercept::tau).collect();
         let albedo: Vec<f32> = cells
             .iter()
-            .flat_map(|c| (0..bands).map(|b| c.albedo(b)))
+            .flat_map(|c| (0..2).flat_map(move |side| (0..bands).map(move |b| c.albedo(side, b))))
             .collect();
         // The check: the cross-section (1 - tau) A and the scattered cross-section, which
         // predictions of the intercepted and scattered power multiply by, each relative to
@@ -93,11 +93,16 @@ pub(super) fn bake_tau(
             error = error.max((pred - e.tau()).abs() / floor);
             let area = projected_area(lo, hi, *d);
             for b in 0..bands {
-                let a = e.albedo(b);
+                let a = e.total_albedo(b);
                 if a <= 0.0 || area <= 0.0 {
                     continue;
                 }
-                let s = interpolate_scattered(&grid, &values, &albedo, bands, b, lo, hi, *d);
+                let s: f32 = (0..2)
+                    .map(|side| {
+                        let at = side * bands + b;
+                        interpolate_scattered(&grid, &values, &albedo, 2 * bands, at, lo, hi, *d)
+                    })
+                    .sum();
                 let meas = a * (1.0 - e.tau());
                 error = error.max((s / area - meas).abs() / (a * floor));
             }

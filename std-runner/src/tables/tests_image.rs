@@ -25,10 +25,11 @@ fn tables(original: usize, bands: u32) -> Tables {
         intensity_error: 0.03,
         reserved: 0,
     };
-    let [tau, albedo, response] = record.lengths();
+    let [tau, albedo, shares, response] = record.lengths();
     let mut values = Vec::new();
     values.extend((0..tau).map(|i| 0.1 * i as f32));
     values.extend((0..albedo).map(|i| 0.5 + 0.01 * i as f32));
+    values.extend((0..shares).map(|i| 0.25 + 0.005 * i as f32));
     values.extend((0..response).map(|i| 2.0 + i as f32));
     Tables {
         original,

@@ -195,12 +195,12 @@ pub(super) fn check_tables<S: SceneSource>(src: &S, h: &Header) -> Result<u32, I
         if t.first != next || t.values() > pool.saturating_sub(next) {
             return err(h, Section::Tables, i, K::TableRange { table });
         }
-        let [tau, albedo, _] = t.lengths();
+        let [tau, albedo, shares, _] = t.lengths();
         for k in 0..t.values() {
             let x = v.get(src, h, next + k)?;
             let max = if k < tau {
                 1.0
-            } else if k < tau + albedo {
+            } else if k < tau + albedo + shares {
                 1.0 + 1e-3
             } else {
                 f32::MAX
