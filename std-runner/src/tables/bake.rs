@@ -91,7 +91,7 @@ impl Default for TableSettings {
             max_out_side: 32,
             out_rays: 4,
             check_out_rays: 8,
-            scattered_target: 0.01,
+            scattered_target: 0.02,
             intensity_target: 0.05,
             checks: 8,
             out_checks: 8,

@@ -263,3 +263,85 @@ fn the_plot_draws_tau_and_both_phase_forms_at_their_directions() {
         );
     }
 }
+
+/// A scene whose only original is a clump of square leaves of side `size` (below 0.7) with
+/// random normals, one at each point of a 2 x 2 x 2 lattice of spacing 0.5 m (they shade
+/// and light each other, and do not cross), placed once.
+fn clump(size: f32, seed: u32) -> Scene {
+    let mut scene = Scene::new(2);
+    let m = two_sided(&mut scene, "leaf", &RHO, &RHO_BACK, &TAU);
+    let mut leaves = Cluster::named("clump");
+    for k in 0..8u32 {
+        let c = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * 0.5;
+        let (u, v) = crate::generate::shapes::frame(direction(k, seed + 1));
+        let h = size * 0.5;
+        add_quad(
+            &mut leaves,
+            [
+                c - u * h - v * h,
+                c + u * h - v * h,
+                c + u * h + v * h,
+                c - u * h + v * h,
+            ],
+            m,
+        );
+    }
+    scene.originals.push(Original {
+        name: "clump".into(),
+        root: leaves,
+    });
+    scene.root.children.push(Cluster {
+        instance: Some(InstanceOf {
+            original: 0,
+            exact: true,
+            transform: Similarity::IDENTITY,
+        }),
+        ..Cluster::default()
+    });
+    scene
+}
+
+#[test]
+fn the_response_by_reciprocity_agrees_with_solves_that_light_one_side() {
+    // The phase table comes from solves under suns at the outgoing cells (reciprocity);
+    // here each value at a pair of cell centres is set against a solve under a sun at the
+    // incoming centre that lights only the side the table keeps it for, its light read
+    // from the surfaces seen from the outgoing centre.
+    use super::sample::sample_sides;
+    let scene = clump(0.4, 3);
+    let settings = small_settings();
+    let mut exec = RayonExecutor::new(2).unwrap();
+    let t = bake_original(&scene, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
+    let view = t.view();
+    let phase = view.phase();
+    let alone = super::Alone::new(&scene, 0).unwrap();
+    let mut compared = 0;
+    for k in 0..6u32 {
+        let ci = hash3(7, k, 1) % t.incoming.cells();
+        let d = t.incoming.direction(ci);
+        for side in 0..2 {
+            if phase.share_at(ci, side, 0) < 0.2 {
+                continue;
+            }
+            let s = sample_sides(&alone, d, &settings, 1 << side, &mut exec).unwrap();
+            for j in 0..4u32 {
+                let co = hash3(7, k * 8 + j, 2) % t.outgoing.cells();
+                let o = t.outgoing.direction(co);
+                let (i, _) = s.intensity(&alone, o, 12, j);
+                for (b, &light) in i.iter().enumerate().take(2) {
+                    let scattered = s.scattered[b] * s.area;
+                    let mean = scattered / (4.0 * std::f32::consts::PI);
+                    let want = light / scattered / view.shadow(o);
+                    let got = phase.response_at(ci, co, side, b);
+                    let scale = light.max(mean) / scattered / view.shadow(o);
+                    assert!(
+                        (got - want).abs() < 0.04 * scale,
+                        "cell {ci} side {side} to {co} band {b}: {got} vs {want}"
+                    );
+                    compared += 1;
+                }
+            }
+        }
+    }
+    assert!(compared >= 32, "{compared}");
+}
