@@ -1,7 +1,8 @@
-//! Baking an original's tables: `tau` on its own grid, then the phase table on grids of
-//! incoming and outgoing directions made finer until interpolation meets error targets at
-//! check directions off the grids (issue 17: "resolution chosen per original by an error
-//! target").
+//! Baking an original's tables: the escape weights, `tau` and the albedo on their own grid,
+//! then the phase table on grids of outgoing directions (a solve per cell) and incoming
+//! directions (rays, by reciprocity: see [`super::response`]) made finer until
+//! interpolation meets error targets at check directions off the grids (issue 17:
+//! "resolution chosen per original by an error target").
 
 use super::OriginalTables;
 use super::intercept::EscapeWeights;
@@ -38,11 +39,12 @@ pub struct TableSettings {
     pub max_tau_side: u32,
     /// Side of the first grid of incoming directions tried.
     pub first_side: u32,
-    /// Largest side of the incoming grid (each cell is one solve).
+    /// Largest side of the incoming grid (rays only; the response holds its cells times the
+    /// outgoing grid's).
     pub max_side: u32,
     /// Side of the first grid of outgoing directions tried.
     pub first_out_side: u32,
-    /// Largest side of the outgoing grid.
+    /// Largest side of the outgoing grid (each cell is one solve).
     pub max_out_side: u32,
     /// Points along each side of the stratified set on every polygon from which rays test
     /// whether it is seen from an outgoing direction (k x k rays a polygon, k at most 15).
