@@ -23,22 +23,16 @@ fn rho_facing(n: Vec3, d: Vec3, b: usize) -> f32 {
     if n.dot(d) >= 0.0 { RHO[b] } else { RHO_BACK[b] }
 }
 
-/// A scene whose only original is one square leaf of side `side` with normal `n`, placed
-/// once.
-pub(super) fn one_leaf(n: Vec3, side: f32) -> Scene {
+/// A scene whose only original, `name`, holds the leaves `add` puts into it (given their
+/// two-sided material), placed once.
+fn placed_once(name: &str, add: impl FnOnce(&mut Cluster, u32)) -> Scene {
     let mut scene = Scene::new(2);
     let m = two_sided(&mut scene, "leaf", &RHO, &RHO_BACK, &TAU);
-    let (u, v) = crate::generate::shapes::frame(n);
-    let h = side * 0.5;
-    let mut leaf = Cluster::named("leaf");
-    add_quad(
-        &mut leaf,
-        [-u * h - v * h, u * h - v * h, u * h + v * h, -u * h + v * h],
-        m,
-    );
+    let mut root = Cluster::named(name);
+    add(&mut root, m);
     scene.originals.push(Original {
-        name: "leaf".into(),
-        root: leaf,
+        name: name.into(),
+        root,
     });
     scene.root.children.push(Cluster {
         instance: Some(InstanceOf {
@@ -49,6 +43,28 @@ pub(super) fn one_leaf(n: Vec3, side: f32) -> Scene {
         ..Cluster::default()
     });
     scene
+}
+
+/// Adds a square leaf of side `side` centred at `c` with normal `n`.
+fn add_square(cluster: &mut Cluster, c: Vec3, n: Vec3, side: f32, material: u32) {
+    let (u, v) = crate::generate::shapes::frame(n);
+    let h = side * 0.5;
+    add_quad(
+        cluster,
+        [
+            c - u * h - v * h,
+            c + u * h - v * h,
+            c + u * h + v * h,
+            c - u * h + v * h,
+        ],
+        material,
+    );
+}
+
+/// A scene whose only original is one square leaf of side `side` with normal `n`, placed
+/// once.
+pub(super) fn one_leaf(n: Vec3, side: f32) -> Scene {
+    placed_once("leaf", |leaf, m| add_square(leaf, Vec3::ZERO, n, side, m))
 }
 
 fn direction(k: u32, seed: u32) -> Vec3 {
@@ -268,37 +284,12 @@ fn the_plot_draws_tau_and_both_phase_forms_at_their_directions() {
 /// random normals, one at each point of a 2 x 2 x 2 lattice of spacing 0.5 m (they shade
 /// and light each other, and do not cross), placed once.
 fn clump(size: f32, seed: u32) -> Scene {
-    let mut scene = Scene::new(2);
-    let m = two_sided(&mut scene, "leaf", &RHO, &RHO_BACK, &TAU);
-    let mut leaves = Cluster::named("clump");
-    for k in 0..8u32 {
-        let c = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * 0.5;
-        let (u, v) = crate::generate::shapes::frame(direction(k, seed + 1));
-        let h = size * 0.5;
-        add_quad(
-            &mut leaves,
-            [
-                c - u * h - v * h,
-                c + u * h - v * h,
-                c + u * h + v * h,
-                c - u * h + v * h,
-            ],
-            m,
-        );
-    }
-    scene.originals.push(Original {
-        name: "clump".into(),
-        root: leaves,
-    });
-    scene.root.children.push(Cluster {
-        instance: Some(InstanceOf {
-            original: 0,
-            exact: true,
-            transform: Similarity::IDENTITY,
-        }),
-        ..Cluster::default()
-    });
-    scene
+    placed_once("clump", |leaves, m| {
+        for k in 0..8u32 {
+            let c = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * 0.5;
+            add_square(leaves, c, direction(k, seed + 1), size, m);
+        }
+    })
 }
 
 #[test]
@@ -308,40 +299,43 @@ fn the_response_by_reciprocity_agrees_with_solves_that_light_one_side() {
     // incoming centre that lights only the side the table keeps it for, its light read
     // from the surfaces seen from the outgoing centre.
     use super::sample::sample_sides;
-    let scene = clump(0.4, 3);
-    let settings = small_settings();
-    let mut exec = RayonExecutor::new(2).unwrap();
-    let t = bake_original(&scene, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
-    let view = t.view();
-    let phase = view.phase();
-    let alone = super::Alone::new(&scene, 0).unwrap();
-    let mut compared = 0;
-    for k in 0..6u32 {
-        let ci = hash3(7, k, 1) % t.incoming.cells();
-        let d = t.incoming.direction(ci);
-        for side in 0..2 {
-            if phase.share_at(ci, side, 0) < 0.2 {
-                continue;
-            }
-            let s = sample_sides(&alone, d, &settings, 1 << side, &mut exec).unwrap();
-            for j in 0..4u32 {
-                let co = hash3(7, k * 8 + j, 2) % t.outgoing.cells();
-                let o = t.outgoing.direction(co);
-                let (i, _) = s.intensity(&alone, o, 12, j);
-                for (b, &light) in i.iter().enumerate().take(2) {
-                    let scattered = s.scattered[b] * s.area;
-                    let mean = scattered / (4.0 * std::f32::consts::PI);
-                    let want = light / scattered / view.shadow(o);
-                    let got = phase.response_at(ci, co, side, b);
-                    let scale = light.max(mean) / scattered / view.shadow(o);
-                    assert!(
-                        (got - want).abs() < 0.04 * scale,
-                        "cell {ci} side {side} to {co} band {b}: {got} vs {want}"
-                    );
-                    compared += 1;
+    // Two clumps: leaves of 0.4 m (close to touching) and of 0.15 m (sparse).
+    for (size, seed) in [(0.4f32, 3u32), (0.15, 11)] {
+        let scene = clump(size, seed);
+        let settings = small_settings();
+        let mut exec = RayonExecutor::new(2).unwrap();
+        let t = bake_original(&scene, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
+        let view = t.view();
+        let phase = view.phase();
+        let alone = super::Alone::new(&scene, 0).unwrap();
+        let mut compared = 0;
+        for k in 0..6u32 {
+            let ci = hash3(7, k, 1) % t.incoming.cells();
+            let d = t.incoming.direction(ci);
+            for side in 0..2 {
+                if phase.share_at(ci, side, 0) < 0.2 {
+                    continue;
+                }
+                let s = sample_sides(&alone, d, &settings, 1 << side, &mut exec).unwrap();
+                for j in 0..4u32 {
+                    let co = hash3(7, k * 8 + j, 2) % t.outgoing.cells();
+                    let o = t.outgoing.direction(co);
+                    let (i, _) = s.intensity(&alone, o, 12, j);
+                    for (b, &light) in i.iter().enumerate().take(2) {
+                        let scattered = s.scattered[b] * s.area;
+                        let mean = scattered / (4.0 * std::f32::consts::PI);
+                        let want = light / scattered / view.shadow(o);
+                        let got = phase.response_at(ci, co, side, b);
+                        let scale = light.max(mean) / scattered / view.shadow(o);
+                        assert!(
+                            (got - want).abs() < 0.04 * scale,
+                            "cell {ci} side {side} to {co} band {b}: {got} vs {want}"
+                        );
+                        compared += 1;
+                    }
                 }
             }
         }
+        assert!(compared >= 32, "clump of {size} m: {compared}");
     }
-    assert!(compared >= 32, "{compared}");
 }
