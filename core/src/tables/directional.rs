@@ -12,6 +12,7 @@
 
 use super::grid::DirectionGrid;
 use super::phase::{PhaseTable, TableError, check_values, side_lit};
+use super::single::SingleScatter;
 use super::tau::{interpolate_scattered, interpolate_tau, projected_area};
 use glam::Vec3;
 
@@ -31,8 +32,11 @@ pub struct DirectionalTables<'a> {
     /// falling on the fronts (side 0) or on the backs (side 1) of the polygons (0..=1 each,
     /// their sum too).
     albedo: &'a [f32],
-    /// The phase table.
+    /// The phase table: all the scattered light, or, with `single`, the light scattered
+    /// more than once.
     phase: PhaseTable<'a>,
+    /// The polygons' first scattering, kept per polygon (see [`super::single`]).
+    single: Option<SingleScatter<'a>>,
     /// The cross-section integrated over the sphere (m^2 sr): the uniform form's spread.
     shadow_integral: f32,
 }
@@ -70,8 +74,27 @@ impl<'a> DirectionalTables<'a> {
             tau,
             albedo,
             phase,
+            single: None,
             shadow_integral,
         })
+    }
+
+    /// The same tables with the polygons' first scattering kept apart: the phase table then
+    /// holds the light scattered more than once.
+    pub fn with_single(self, single: SingleScatter<'a>) -> Result<Self, TableError> {
+        let stride = super::single::shape_stride(self.phase.bands());
+        if single.shape().len() != single.polygons() * stride {
+            return Err(TableError::Bands);
+        }
+        Ok(Self {
+            single: Some(single),
+            ..self
+        })
+    }
+
+    /// The polygons' first scattering, when the tables keep it apart.
+    pub fn single(&self) -> Option<SingleScatter<'a>> {
+        self.single
     }
 
     /// The box (m).
@@ -149,10 +172,19 @@ impl<'a> DirectionalTables<'a> {
     }
 
     /// Intensity leaving the box towards `observer` in band `band` for a sun of 1 W/m^2
-    /// towards `source` (m^2/sr), by the bidirectional response: per side lit (see
-    /// [`side_lit`]), the response interpolated over the incoming cells where that side is
-    /// lit times the power scattered from that side, times the cross-section seen.
+    /// towards `source` (m^2/sr): the polygons' first scattering where the tables keep it
+    /// (see [`super::single`]) plus the bidirectional response's part.
     pub fn intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
+        let single = self
+            .single
+            .map_or(0.0, |s| s.intensity(source, observer, band));
+        single + self.response_intensity(source, observer, band)
+    }
+
+    /// The part of [`Self::intensity`] the phase table holds: per side lit (see
+    /// [`side_lit`]), the response interpolated over the incoming cells where that side is
+    /// lit times the power scattered from that side, times the cross-section seen (m^2/sr).
+    pub fn response_intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
         let total = self.scattered(source, band);
         let mut sum = 0.0;
         for side in 0..2 {

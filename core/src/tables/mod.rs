@@ -1,13 +1,15 @@
 //! Directional tables of originals: what a closed instance knows about its contents as
 //! functions of direction (issue 17). The direction grid they are sampled on, the box's
 //! projected area, the uncollided transmittance and its table baked to an error target, the
-//! light leaving a box towards a direction, and the phase table.
+//! light leaving a box towards a direction, the phase table, and the polygons' first
+//! scattering kept apart.
 
 pub mod bake;
 pub mod directional;
 pub mod grid;
 pub mod outgoing;
 pub mod phase;
+pub mod single;
 pub mod tau;
 
 #[cfg(test)]
@@ -16,5 +18,7 @@ mod tests_bake;
 mod tests_grid;
 #[cfg(test)]
 mod tests_phase;
+#[cfg(test)]
+mod tests_single;
 #[cfg(test)]
 mod tests_tau;
