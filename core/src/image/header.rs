@@ -6,10 +6,10 @@ use bytemuck::{Pod, Zeroable};
 pub const MAGIC: [u8; 8] = *b"HIRADSCN";
 
 /// The image version this core reads and writes.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 
 /// Number of sections in the table.
-pub const SECTION_COUNT: usize = 15;
+pub const SECTION_COUNT: usize = 16;
 
 /// The sections, in the order they are laid out in the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,8 +43,11 @@ pub enum Section {
     Cameras,
     /// [`super::TableRecord`]: an original's directional tables, by increasing original.
     Tables,
-    /// `f32` pool of the tables' values, each table's `tau`, albedo and response in turn.
+    /// `f32` pool of the tables' values, each table's `tau`, albedo, shares, response and
+    /// scatterers' shapes in turn.
     TableValues,
+    /// `u8` pool of the tables' scatterers' visible fractions (1/255 steps), table by table.
+    TableVisibility,
 }
 
 impl Section {
@@ -65,6 +68,7 @@ impl Section {
         Section::Cameras,
         Section::Tables,
         Section::TableValues,
+        Section::TableVisibility,
     ];
 
     /// Size of one record in bytes.
@@ -85,6 +89,7 @@ impl Section {
             Section::Cameras => core::mem::size_of::<CameraRecord>(),
             Section::Tables => core::mem::size_of::<TableRecord>(),
             Section::TableValues => 4,
+            Section::TableVisibility => 1,
         }) as u32
     }
 
@@ -106,6 +111,7 @@ impl Section {
             Section::Cameras => "cameras",
             Section::Tables => "tables",
             Section::TableValues => "table values",
+            Section::TableVisibility => "table visibility",
         }
     }
 }

@@ -224,8 +224,9 @@ pub struct TableRecord {
     pub hi: [f32; 3],
     /// First value of `tau` (`tau_side^2` values) in the pool; the albedo (`tau_side^2 x 2
     /// x bands`, on the `tau` grid, per side lit), the shares by side lit (`incoming_side^2
-    /// x 2 x bands`) and the response (`incoming_side^2 x outgoing_side^2 x 2 x bands`)
-    /// follow it.
+    /// x 2 x bands`), the response (`incoming_side^2 x outgoing_side^2 x 2 x bands`) and the
+    /// shapes of the scatterers (`scatterers x (4 + 3 x bands)`: normal, area, then per band
+    /// front and back reflectance and transmittance) follow it.
     pub first: u64,
     /// Largest relative error of the cross-section at the bake's check directions.
     pub tau_error: f32,
@@ -233,17 +234,25 @@ pub struct TableRecord {
     pub scattered_error: f32,
     /// Largest error of the bidirectional intensity at the bake's check directions.
     pub intensity_error: f32,
+    /// Polygons whose first scattering the tables keep apart (see
+    /// [`crate::tables::single`]); 0 when the phase table holds all the scattered light.
+    pub scatterers: u32,
+    /// Side of the grid of the scatterers' visible fractions; 0 when there are none.
+    pub single_side: u32,
     /// Zero.
     pub reserved: u32,
+    /// First byte of the scatterers' visible fractions (`single_side^2 x scatterers`) in the
+    /// table visibility pool.
+    pub first_visible: u64,
 }
 
 /// Flag of [`TableRecord::flags`]: the bake met its targets.
 pub const TABLE_MET: u32 = 1;
 
 impl TableRecord {
-    /// Values of `tau`, of the albedo, of the shares by side lit and of the response, in
-    /// that order.
-    pub fn lengths(&self) -> [u64; 4] {
+    /// Values of `tau`, of the albedo, of the shares by side lit, of the response and of
+    /// the scatterers' shapes, in that order.
+    pub fn lengths(&self) -> [u64; 5] {
         let n = |s: u32| s as u64 * s as u64;
         let bands = self.bands as u64;
         [
@@ -251,7 +260,14 @@ impl TableRecord {
             n(self.tau_side) * 2 * bands,
             n(self.incoming_side) * 2 * bands,
             n(self.incoming_side) * n(self.outgoing_side) * 2 * bands,
+            self.scatterers as u64
+                * crate::tables::single::shape_stride(self.bands as usize) as u64,
         ]
+    }
+
+    /// Bytes of the scatterers' visible fractions in the visibility pool.
+    pub fn visible_bytes(&self) -> u64 {
+        self.single_side as u64 * self.single_side as u64 * self.scatterers as u64
     }
 
     /// All its values.
@@ -268,6 +284,6 @@ const _: () = {
     assert!(core::mem::size_of::<MaterialRecord>() == 16);
     assert!(core::mem::size_of::<LightRecord>() == 16);
     assert!(core::mem::size_of::<CameraRecord>() == 48);
-    assert!(core::mem::size_of::<TableRecord>() == 72);
+    assert!(core::mem::size_of::<TableRecord>() == 88);
     assert!(core::mem::size_of::<super::Header>() == 40 + 24 * super::SECTION_COUNT);
 };

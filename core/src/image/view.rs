@@ -229,6 +229,11 @@ impl<S: SceneSource> SceneView<S> {
         self.read(Section::TableValues, first, out)
     }
 
+    /// Scatterers' visible fractions (1/255 steps) from byte `first` on into `out`.
+    pub fn table_visibility(&self, first: u64, out: &mut [u8]) -> Result<(), ImageError> {
+        self.read(Section::TableVisibility, first, out)
+    }
+
     /// One camera.
     pub fn camera(&self, id: CameraId) -> Result<CameraData, ImageError> {
         let c: CameraRecord = self.one(Section::Cameras, id.0 as u64)?;

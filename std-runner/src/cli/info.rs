@@ -35,8 +35,21 @@ struct Report {
     info: hirad_core::image::SceneInfo,
     /// The up axis `solve` and `flatten` take, and what says so.
     up: (crate::scene::Up, &'static str),
-    /// Per table: original name, tau side, incoming side, outgoing side, bytes, met.
-    tables: Vec<(String, u32, u32, u32, u64, bool)>,
+    /// One per table.
+    tables: Vec<TableLine>,
+}
+
+/// What `info` says of one original's tables.
+struct TableLine {
+    name: String,
+    tau: u32,
+    incoming: u32,
+    outgoing: u32,
+    /// Polygons whose first scattering is kept apart, and the side of their grid.
+    scatterers: u32,
+    single_side: u32,
+    bytes: u64,
+    met: bool,
 }
 
 fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
@@ -75,14 +88,16 @@ fn report<S: SceneSource>(format: Format, v: &SceneView<S>) -> Result<Report> {
         let name = v
             .string(hirad_core::StringId(o.name), &mut buf)?
             .to_string();
-        r.tables.push((
+        r.tables.push(TableLine {
             name,
-            rec.tau_side,
-            rec.incoming_side,
-            rec.outgoing_side,
-            4 * rec.values(),
-            rec.flags & hirad_core::image::TABLE_MET != 0,
-        ));
+            tau: rec.tau_side,
+            incoming: rec.incoming_side,
+            outgoing: rec.outgoing_side,
+            scatterers: rec.scatterers,
+            single_side: rec.single_side,
+            bytes: 4 * rec.values() + rec.visible_bytes(),
+            met: rec.flags & hirad_core::image::TABLE_MET != 0,
+        });
     }
     for m in 0..info.materials {
         let d = v.material(MaterialId(m))?;
@@ -158,13 +173,26 @@ fn table(path: &std::path::Path, r: &Report) -> String {
         "tables            {} of {} originals ({} bytes)",
         i.tables,
         i.originals,
-        r.tables.iter().map(|t| t.4).sum::<u64>()
+        r.tables.iter().map(|t| t.bytes).sum::<u64>()
     );
-    for (name, tau, inc, out, bytes, met) in &r.tables {
+    for t in &r.tables {
+        let single = if t.scatterers > 0 {
+            format!(
+                ", first scattering of {} polygons on grid {}",
+                t.scatterers, t.single_side
+            )
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             s,
-            "  {name}: tau grid {tau}, phase {inc} x {out}, {bytes} bytes{}",
-            if *met { "" } else { ", error targets not met" }
+            "  {}: tau grid {}, phase {} x {}{single}, {} bytes{}",
+            t.name,
+            t.tau,
+            t.incoming,
+            t.outgoing,
+            t.bytes,
+            if t.met { "" } else { ", error targets not met" }
         );
     }
     let _ = writeln!(s, "cluster depth     {}", i.max_node_depth);
@@ -219,9 +247,16 @@ fn json(path: &std::path::Path, r: &Report) -> String {
         i.image_bytes,
         r.tables
             .iter()
-            .map(|(name, tau, inc, out, bytes, met)| format!(
-                "{{\"original\":{},\"tau_side\":{tau},\"incoming_side\":{inc},\"outgoing_side\":{out},\"bytes\":{bytes},\"met\":{met}}}",
-                json_str(name)
+            .map(|t| format!(
+                "{{\"original\":{},\"tau_side\":{},\"incoming_side\":{},\"outgoing_side\":{},\"scatterers\":{},\"single_side\":{},\"bytes\":{},\"met\":{}}}",
+                json_str(&t.name),
+                t.tau,
+                t.incoming,
+                t.outgoing,
+                t.scatterers,
+                t.single_side,
+                t.bytes,
+                t.met
             ))
             .collect::<Vec<_>>()
             .join(",")

@@ -67,6 +67,11 @@ pub struct Args {
     /// Largest side of the grid of outgoing directions (side x side suns, one solve each).
     #[arg(long, default_value_t = 32)]
     pub max_out_side: u32,
+    /// Largest side of the grid of the polygons' visible fractions, which keep their first
+    /// scattering apart from the phase table (for originals whose fractions fit 8 MiB; 0:
+    /// the phase table holds all the scattered light).
+    #[arg(long, default_value_t = 128)]
+    pub max_single_side: u32,
     /// Folder of the table cache (default: $HIRAD_CACHE, else $XDG_CACHE_HOME/hirad/tables,
     /// else ~/.cache/hirad/tables). Tables are looked up by a hash of the original's
     /// geometry, materials and these settings; a damaged entry is recomputed.
@@ -146,6 +151,7 @@ pub fn run(a: Args) -> Result<()> {
     settings.tau.target = a.tau_target;
     settings.max_tau_side = a.max_tau_side;
     settings.max_out_side = a.max_out_side;
+    settings.max_single_side = a.max_single_side;
     if !(a.epsilon > 0.0 && a.epsilon.is_finite()) {
         return Err(crate::exit::usage(anyhow::anyhow!(
             "--epsilon {} must be a positive number",
@@ -168,6 +174,15 @@ pub fn run(a: Args) -> Result<()> {
                 hirad_core::tables::grid::MAX_SIDE
             )));
         }
+    }
+    if a.max_single_side != 0
+        && !(4..=hirad_core::tables::grid::MAX_SIDE).contains(&a.max_single_side)
+    {
+        return Err(crate::exit::usage(anyhow::anyhow!(
+            "--max-single-side {} must be 0 (none) or between 4 and {}",
+            a.max_single_side,
+            hirad_core::tables::grid::MAX_SIDE
+        )));
     }
     let mut exec = RayonExecutor::new(a.threads.unwrap_or(0))?;
     let progress = Progress::new(a.quiet);
@@ -386,7 +401,7 @@ fn json(tables: &[OriginalTables], checks: &[CheckReport], cache_hits: u32) -> S
         });
         let _ = write!(
             s,
-            "{}\n    {{\"name\": {}, \"polygons\": {}, \"tau_side\": {}, \"tau_error\": {}, \"incoming_side\": {}, \"outgoing_side\": {}, \"scattered_error\": {}, \"intensity_error\": {}, \"met\": {}, \"energy_residual\": [{}], \"bytes\": {}, \"solves\": {}, \"rays\": {}, \"seconds\": {:.3}, \"check\": {}}}",
+            "{}\n    {{\"name\": {}, \"polygons\": {}, \"tau_side\": {}, \"tau_error\": {}, \"incoming_side\": {}, \"outgoing_side\": {}, \"scatterers\": {}, \"single_side\": {}, \"single_error\": {}, \"scattered_error\": {}, \"intensity_error\": {}, \"met\": {}, \"energy_residual\": [{}], \"bytes\": {}, \"solves\": {}, \"rays\": {}, \"seconds\": {:.3}, \"check\": {}}}",
             if i == 0 { "" } else { "," },
             super::info::json_str(&t.name),
             t.polygons,
@@ -394,6 +409,12 @@ fn json(tables: &[OriginalTables], checks: &[CheckReport], cache_hits: u32) -> S
             t.tau_error,
             t.incoming.side(),
             t.outgoing.side(),
+            t.single.as_ref().map_or(0, |x| x.polygons),
+            t.single.as_ref().map_or(0, |x| x.grid.side()),
+            t.single
+                .as_ref()
+                .and_then(|x| x.tried.last())
+                .map_or("null".to_string(), |e| e.1.to_string()),
             t.scattered_error,
             t.intensity_error,
             t.met,
@@ -439,6 +460,17 @@ fn summary(t: &OriginalTables) -> String {
     );
     if t.solves == 0 {
         s.insert_str(s.len() - 1, " (from the cache)");
+    }
+    if let Some(x) = &t.single {
+        let _ = writeln!(
+            s,
+            "  first scattering of its {} polygons kept apart on grid {}",
+            x.polygons,
+            x.grid.side()
+        );
+        for (side, e) in &x.tried {
+            let _ = writeln!(s, "  first scattering grid {side}: error {:.2}%", 100.0 * e);
+        }
     }
     for (side, e) in &t.out_tried {
         let _ = writeln!(

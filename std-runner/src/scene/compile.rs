@@ -92,6 +92,7 @@ pub fn compile(scene: &Scene) -> Result<Vec<u8>, SceneError> {
     tables.sort_by_key(|t| w.new_of.get(t.original).copied().unwrap_or(u32::MAX));
     let mut records = Vec::with_capacity(tables.len());
     let mut pool: Vec<f32> = Vec::new();
+    let mut visibility: Vec<u8> = Vec::new();
     for (i, t) in tables.iter().enumerate() {
         if i > 0 && tables[i - 1].original == t.original {
             return Err(SceneError {
@@ -110,6 +111,17 @@ pub fn compile(scene: &Scene) -> Result<Vec<u8>, SceneError> {
                 ),
             });
         }
+        if t.visible.len() as u64 != t.record.visible_bytes() {
+            return Err(SceneError {
+                path: String::new(),
+                message: format!(
+                    "the tables of original {} hold {} visible fractions where their grid needs {}",
+                    t.original,
+                    t.visible.len(),
+                    t.record.visible_bytes()
+                ),
+            });
+        }
         let Some(&original) = w.new_of.get(t.original) else {
             return Err(SceneError {
                 path: String::new(),
@@ -119,9 +131,11 @@ pub fn compile(scene: &Scene) -> Result<Vec<u8>, SceneError> {
         records.push(TableRecord {
             original,
             first: pool.len() as u64,
+            first_visible: visibility.len() as u64,
             ..t.record
         });
         pool.extend_from_slice(&t.values);
+        visibility.extend_from_slice(&t.visible);
     }
     let bytes = w.finish(
         scene.bands as u32,
@@ -129,7 +143,7 @@ pub fn compile(scene: &Scene) -> Result<Vec<u8>, SceneError> {
         &suns,
         &sky,
         &cameras,
-        (&records, &pool),
+        (&records, &pool, &visibility),
     )?;
     if let Err(e) = SceneView::open(SliceSource(&bytes)) {
         return Err(SceneError {
@@ -289,7 +303,7 @@ impl Writer {
         suns: &[LightRecord],
         sky: &[LightRecord],
         cameras: &[CameraRecord],
-        (tables, table_values): (&[TableRecord], &[f32]),
+        (tables, table_values, visibility): (&[TableRecord], &[f32], &[u8]),
     ) -> Result<Vec<u8>, SceneError> {
         let sections: [&[u8]; SECTION_COUNT] = [
             &self.strings.bytes,
@@ -307,6 +321,7 @@ impl Writer {
             bytemuck::cast_slice(cameras),
             bytemuck::cast_slice(tables),
             bytemuck::cast_slice(table_values),
+            visibility,
         ];
         let mut counts = [0u64; SECTION_COUNT];
         for s in Section::ALL {

@@ -75,10 +75,13 @@ pub fn decompile<S: SceneSource>(v: &SceneView<S>) -> Result<Scene, ImageError> 
         let record = v.table(i)?;
         let mut values = vec![0.0f32; record.values() as usize];
         v.table_values(record.first, &mut values)?;
+        let mut visible = vec![0u8; record.visible_bytes() as usize];
+        v.table_visibility(record.first_visible, &mut visible)?;
         scene.tables.push(super::Tables {
             original: record.original as usize,
             record,
             values,
+            visible,
         });
     }
     Ok(scene)

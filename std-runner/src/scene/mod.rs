@@ -61,8 +61,11 @@ pub struct Tables {
     pub original: usize,
     /// Grids, box and bake errors (its `original` and `first` are set when compiling).
     pub record: hirad_core::image::TableRecord,
-    /// `tau`, albedo and response values, in that order (see the record's `lengths`).
+    /// `tau`, albedo, shares, response and scatterers' shape values, in that order (see
+    /// the record's `lengths`).
     pub values: Vec<f32>,
+    /// The scatterers' visible fractions (see the record's `visible_bytes`).
+    pub visible: Vec<u8>,
 }
 
 /// A named material.

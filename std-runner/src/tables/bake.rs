@@ -9,6 +9,7 @@ use super::intercept::EscapeWeights;
 use super::original::Alone;
 use super::response::{PhaseValues, Returns, phase_values};
 use super::sample::{Sample, Visibilities, sample_at};
+use super::single_bake::{bake_single, first_scattering};
 use super::tau_bake::bake_tau;
 use crate::scene::Scene;
 use crate::solve::RayonExecutor;
@@ -19,6 +20,7 @@ use hirad_core::limits::MAX_BANDS;
 use hirad_core::sampling::{hash3, unit2};
 use hirad_core::tables::bake::TauSettings;
 use hirad_core::tables::grid::{DirectionGrid, MAX_SIDE};
+use hirad_core::tables::single::SingleScatter;
 use hirad_core::tables::tau::{interpolate_tau, tau};
 use std::time::Instant;
 
@@ -51,6 +53,20 @@ pub struct TableSettings {
     pub out_rays: u32,
     /// The same for the check directions.
     pub check_out_rays: u32,
+    /// Side of the first grid of the polygons' visible fractions tried (their first
+    /// scattering kept apart, see [`hirad_core::tables::single`]); 0 keeps none apart.
+    pub first_single_side: u32,
+    /// Largest side of that grid; 0 keeps no first scattering apart.
+    pub max_single_side: u32,
+    /// Largest size of the visible fractions (bytes: cells x polygons): larger originals
+    /// leave all their light to the phase table.
+    pub max_single_bytes: u64,
+    /// Rays along each side of the stratified set on every polygon for its visible
+    /// fractions (k x k, at most 15).
+    pub single_rays: u32,
+    /// Largest error of the interpolated first scattering at the check directions
+    /// (relative as the intensity's).
+    pub single_target: f32,
     /// Largest relative error of the interpolated scattered fraction.
     pub scattered_target: f32,
     /// Largest relative error of the interpolated intensity (see
@@ -93,6 +109,12 @@ impl Default for TableSettings {
             max_out_side: 32,
             out_rays: 4,
             check_out_rays: 8,
+            first_single_side: 32,
+            max_single_side: 128,
+            // 8 MiB: 512 polygons at side 128, 2048 at 64, 8192 at 32.
+            max_single_bytes: 8 << 20,
+            single_rays: 15,
+            single_target: 0.02,
             scattered_target: 0.02,
             intensity_target: 0.05,
             checks: 8,
@@ -117,10 +139,10 @@ pub fn uniform_direction(seed: u32, k: u32, salt: u32) -> Vec3 {
 
 /// A check direction with what was measured there: the intensity towards a few outgoing
 /// directions.
-struct Check {
-    sample: Sample,
+pub(super) struct Check {
+    pub sample: Sample,
     /// (outgoing direction, intensity per band).
-    out: Vec<(Vec3, [f32; MAX_BANDS])>,
+    pub out: Vec<(Vec3, [f32; MAX_BANDS])>,
 }
 
 /// The error of an interpolated intensity `pred` against the measured `meas`, relative to
@@ -140,7 +162,7 @@ pub(super) fn scattered_error(pred: f32, meas: f32) -> f32 {
 }
 
 /// Mean intensity over all directions of a sample (m^2/sr): its scattered power over 4 pi.
-fn mean_intensity(s: &Sample, band: usize) -> f32 {
+pub(super) fn mean_intensity(s: &Sample, band: usize) -> f32 {
     s.scattered[band] * s.area / (4.0 * std::f32::consts::PI)
 }
 
@@ -171,6 +193,8 @@ pub fn bake_alone(
         || settings.max_side > MAX_SIDE
         || settings.first_out_side == 0
         || settings.max_out_side > MAX_SIDE
+        || settings.max_single_side > MAX_SIDE
+        || settings.first_single_side > MAX_SIDE
         || settings.out_rays == 0
     {
         return Err(anyhow!("table settings out of range"));
@@ -219,6 +243,25 @@ pub fn bake_alone(
         checks.push(Check { sample, out });
     }
 
+    // The polygons' first scattering, kept apart when the original is small enough: the
+    // phase table then holds the light scattered more than once, which is smooth.
+    let single = bake_single(alone, &checks, &name, settings, &mut rays, progress)?;
+    let single_view = single
+        .as_ref()
+        .map(|s| SingleScatter::new(s.grid, bands, s.polygons, &s.shape, &s.visible))
+        .transpose()
+        .map_err(|e| anyhow!("{name}: first scattering: {e:?}"))?;
+    let k = settings.single_rays.clamp(1, 15);
+    // The check suns' reach on each polygon, for the first scattering at the outgoing cells.
+    let sun_seen: Vec<Vec<f32>> = match single_view {
+        Some(_) => checks
+            .iter()
+            .enumerate()
+            .map(|(i, c)| alone.visible(c.sample.source, k, hash3(settings.seed, i as u32, 0x51)))
+            .collect(),
+        None => Vec::new(),
+    };
+
     // The outgoing grid: the check suns' light, measured on the grid and interpolated at
     // the outgoing check directions.
     let mut out_side = settings.first_out_side.min(settings.max_out_side);
@@ -230,13 +273,24 @@ pub fn bake_alone(
         progress(&format!("{name}: outgoing grid {out_side}{missed}"), 0, 1);
         let this = Visibilities::new(alone, grid, settings.out_rays, settings.seed ^ 0x5EED);
         rays += this.rays();
-        for (k, c) in checks.iter().enumerate() {
+        for (k_check, c) in checks.iter().enumerate() {
             progress(
                 &format!("{name}: outgoing grid {out_side}{missed}"),
-                k as u64,
+                k_check as u64,
                 checks.len() as u64,
             );
-            let values = c.sample.intensity_grid(alone, grid, &this);
+            let mut values = c.sample.intensity_grid(alone, grid, &this);
+            let d = c.sample.source;
+            if let Some(vd) = sun_seen.get(k_check) {
+                // What the grid holds: the light scattered more than once.
+                for cell in 0..grid.cells() {
+                    let o = grid.direction(cell);
+                    for b in 0..bands {
+                        values[cell as usize * bands + b] -=
+                            first_scattering(alone, d, o, b, |p| vd[p], |p| this.fraction(cell, p));
+                    }
+                }
+            }
             for (o, meas) in &c.out {
                 for b in 0..bands {
                     let w = grid.weights(*o);
@@ -246,7 +300,8 @@ pub fn bake_alone(
                             wt * per_shadow(values[cell as usize * bands + b], grid.direction(cell))
                         })
                         .sum::<f32>()
-                        * shadow(*o);
+                        * shadow(*o)
+                        + single_view.map_or(0.0, |s| s.intensity(d, *o, b));
                     worst = worst.max(intensity_error(pred, meas[b], mean_intensity(&c.sample, b)));
                 }
             }
@@ -263,9 +318,20 @@ pub fn bake_alone(
 
     // The light every polygon side sends towards each outgoing cell, by a solve there.
     let what = format!("{name}: suns on the outgoing grid {out_side}");
-    let returns = Returns::solve(alone, outgoing, settings, exec, &mut |done, total| {
-        progress(&what, done, total)
-    })?;
+    // With the first scattering kept apart, each side's direct light at the outgoing cells
+    // (from its visible fractions there) is set apart from what the solves give.
+    let direct = single_view.map(|_| Visibilities::new(alone, outgoing, k, settings.seed ^ 0xD1));
+    if let Some(v) = &direct {
+        rays += v.rays();
+    }
+    let returns = Returns::solve(
+        alone,
+        outgoing,
+        direct.as_ref(),
+        settings,
+        exec,
+        &mut |done, total| progress(&what, done, total),
+    )?;
     solves += outgoing.cells();
     // `tau` at an incoming cell's centre by its own rays (the energy check's uncollided part).
     let tau_at = |d: Vec3| {
@@ -316,6 +382,7 @@ pub fn bake_alone(
             outgoing,
             shares,
             response,
+            single: single.clone(),
             absorbed,
             residual,
             scattered_error: 0.0,

@@ -12,16 +12,14 @@ use super::bake::TableSettings;
 use super::original::Alone;
 use crate::scene::Scene;
 use anyhow::{Context, Result};
-use glam::Vec3;
 use hirad_core::image::TableRecord;
-use hirad_core::tables::grid::DirectionGrid;
 use std::path::{Path, PathBuf};
 
 /// First bytes of an entry.
 const MAGIC: &[u8; 8] = b"HIRADTBL";
 
 /// Changes whenever what a bake computes changes, so that older entries miss.
-const BAKE_VERSION: u32 = 4;
+const BAKE_VERSION: u32 = 5;
 
 /// A folder of cached tables.
 #[derive(Clone, Debug)]
@@ -107,7 +105,8 @@ impl Cache {
 }
 
 /// An entry: magic, version, key, the table record, polygons, then the values, absorbed
-/// fractions and residuals as f32, and a checksum of all before it.
+/// fractions and residuals as f32, the scatterers' visible fractions as bytes, and a
+/// checksum of all before it.
 fn encode(key: &Key, t: &OriginalTables) -> Vec<u8> {
     let rec = t.to_scene();
     let mut b = Vec::new();
@@ -119,6 +118,7 @@ fn encode(key: &Key, t: &OriginalTables) -> Vec<u8> {
     for v in rec.values.iter().chain(&t.absorbed).chain(&t.residual) {
         b.extend_from_slice(&v.to_le_bytes());
     }
+    b.extend_from_slice(&rec.visible);
     let sum = blake3::hash(&b);
     b.extend_from_slice(sum.as_bytes());
     b
@@ -140,50 +140,28 @@ fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTable
     }
     let record: TableRecord = bytemuck::pod_read_unaligned(&body[head..head + rec_size]);
     let polygons = u64::from_le_bytes(body[head + rec_size..head + rec_size + 8].try_into().ok()?);
-    let floats: Vec<f32> = body[head + rec_size + 8..]
+    let values = record.values() as usize;
+    let per_cell = (record.incoming_side as usize).pow(2) * record.bands as usize;
+    let visible = record.visible_bytes() as usize;
+    let rest = &body[head + rec_size + 8..];
+    if rest.len() != 4 * (values + 2 * per_cell) + visible {
+        return None;
+    }
+    let (floats, visible) = rest.split_at(rest.len() - visible);
+    let floats: Vec<f32> = floats
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
-    let [tau, albedo, shares, _] = record.lengths();
-    let values = record.values() as usize;
-    let per_cell = (record.incoming_side as usize).pow(2) * record.bands as usize;
-    if floats.len() != values + 2 * per_cell {
-        return None;
-    }
-    let grid = |s: u32| DirectionGrid::new(s).ok();
-    let (tau_grid, incoming, outgoing) = (
-        grid(record.tau_side)?,
-        grid(record.incoming_side)?,
-        grid(record.outgoing_side)?,
-    );
-    let (tau_end, albedo_end) = (tau as usize, (tau + albedo) as usize);
-    let shares_end = albedo_end + shares as usize;
-    let t = OriginalTables {
-        name: name.to_string(),
+    let mut t = OriginalTables::from_record(
+        name,
         index,
-        polygons: polygons as usize,
-        bands: record.bands as usize,
-        lo: Vec3::from(record.lo),
-        hi: Vec3::from(record.hi),
-        tau_grid,
-        tau: floats[..tau_end].to_vec(),
-        tau_error: record.tau_error,
-        incoming,
-        outgoing,
-        albedo: floats[tau_end..albedo_end].to_vec(),
-        shares: floats[albedo_end..shares_end].to_vec(),
-        response: floats[shares_end..values].to_vec(),
-        absorbed: floats[values..values + per_cell].to_vec(),
-        residual: floats[values + per_cell..].to_vec(),
-        scattered_error: record.scattered_error,
-        intensity_error: record.intensity_error,
-        tried: Vec::new(),
-        out_tried: Vec::new(),
-        met: record.flags & hirad_core::image::TABLE_MET != 0,
-        solves: 0,
-        rays: 0,
-        seconds: 0.0,
-    };
+        polygons as usize,
+        &record,
+        &floats[..values],
+        visible,
+    )?;
+    t.absorbed = floats[values..values + per_cell].to_vec();
+    t.residual = floats[values + per_cell..].to_vec();
     // The values must make sound tables (ranges, lengths, box), as the image's would.
     t.try_view().ok()?;
     Some(t)

@@ -8,7 +8,7 @@ use std::io::{self, Write};
 pub const HEADER: &str = "original,band,cell,x,y,z,solid_angle_sr,tau,area_m2,shadow_m2,albedo,scattered_m2,absorbed_fraction,energy_residual";
 
 /// Header of the bidirectional file.
-pub const BIDIRECTIONAL_HEADER: &str = "original,band,in_cell,out_cell,out_x,out_y,out_z,response_front_per_m2_sr,response_back_per_m2_sr,intensity_m2_sr";
+pub const BIDIRECTIONAL_HEADER: &str = "original,band,in_cell,out_cell,out_x,out_y,out_z,response_front_per_m2_sr,response_back_per_m2_sr,first_scattering_m2_sr,intensity_m2_sr";
 
 /// One row per original, band and incoming cell: the direction towards the sun (the
 /// original's frame), the cell's solid angle, `tau` and the areas there, the albedo, the
@@ -50,8 +50,10 @@ pub fn write_directions(
 }
 
 /// One row per original, band, incoming and outgoing cell: the responses to light falling
-/// on the fronts and on the backs, and the intensity towards the outgoing cell's centre for
-/// a sun of 1 W/m^2 at the incoming cell's centre.
+/// on the fronts and on the backs (of the light scattered more than once where the first
+/// scattering is kept apart), the first scattering (0 where it is not kept apart) and the
+/// whole intensity towards the outgoing cell's centre, for a sun of 1 W/m^2 at the incoming
+/// cell's centre.
 pub fn write_bidirectional(
     out: &mut dyn Write,
     tables: &[OriginalTables],
@@ -68,7 +70,7 @@ pub fn write_bidirectional(
                 for b in 0..t.bands {
                     writeln!(
                         out,
-                        "{},{},{ci},{co},{},{},{},{},{},{}",
+                        "{},{},{ci},{co},{},{},{},{},{},{},{}",
                         csv_name(&t.name),
                         band_label(names, b),
                         o.x,
@@ -76,6 +78,7 @@ pub fn write_bidirectional(
                         o.z,
                         phase.response_at(ci, co, 0, b),
                         phase.response_at(ci, co, 1, b),
+                        view.single().map_or(0.0, |x| x.intensity(source, o, b)),
                         view.intensity(source, o, b)
                     )?;
                 }

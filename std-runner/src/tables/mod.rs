@@ -15,6 +15,7 @@ mod original;
 mod plot;
 mod response;
 mod sample;
+mod single_bake;
 mod tau_bake;
 #[cfg(test)]
 mod tests;
@@ -33,6 +34,7 @@ use glam::Vec3;
 use hirad_core::tables::directional::DirectionalTables;
 use hirad_core::tables::grid::DirectionGrid;
 use hirad_core::tables::phase::PhaseTable;
+use hirad_core::tables::single::SingleScatter;
 
 /// The tables of one original and what was measured making them.
 #[derive(Clone, Debug)]
@@ -70,6 +72,9 @@ pub struct OriginalTables {
     /// Per incoming cell, outgoing cell, side lit and band: the response (1/(m^2 sr), see
     /// [`PhaseTable`]).
     pub response: Vec<f32>,
+    /// The polygons' first scattering kept apart, when the original is small enough (the
+    /// response then holds the light scattered more than once).
+    pub single: Option<Scatterers>,
     /// Per incoming cell and band: the absorbed fraction.
     pub absorbed: Vec<f32>,
     /// Per incoming cell and band: what enters minus what is absorbed, scattered out (the
@@ -95,6 +100,24 @@ pub struct OriginalTables {
     pub seconds: f64,
 }
 
+/// The polygons of an original whose first scattering its tables keep apart (see
+/// [`hirad_core::tables::single`]).
+#[derive(Clone, Debug)]
+pub struct Scatterers {
+    /// Grid of the visible fractions.
+    pub grid: DirectionGrid,
+    /// Polygons.
+    pub polygons: usize,
+    /// Per polygon: normal, area (m^2), then per band front and back reflectance and
+    /// transmittance.
+    pub shape: Vec<f32>,
+    /// `[cell * polygons + p]`: visible fractions in 1/255 steps.
+    pub visible: Vec<u8>,
+    /// Grids tried: side, largest error of the interpolated first scattering at the check
+    /// directions (relative as the intensity's).
+    pub tried: Vec<(u32, f32)>,
+}
+
 impl OriginalTables {
     /// The tables as the core reads them, or why they are not sound.
     pub fn try_view(&self) -> Result<DirectionalTables<'_>, hirad_core::tables::phase::TableError> {
@@ -105,14 +128,91 @@ impl OriginalTables {
             &self.shares,
             &self.response,
         )?;
-        DirectionalTables::new(
+        let t = DirectionalTables::new(
             self.lo,
             self.hi,
             self.tau_grid,
             &self.tau,
             &self.albedo,
             phase,
-        )
+        )?;
+        match &self.single {
+            None => Ok(t),
+            Some(s) => t.with_single(SingleScatter::new(
+                s.grid, self.bands, s.polygons, &s.shape, &s.visible,
+            )?),
+        }
+    }
+
+    /// Tables as an image or a cache entry stores them: `values` in the record's order
+    /// (see [`TableRecord::lengths`]) and the scatterers' visible fractions; `None` unless
+    /// they make sound tables. What only a bake knows (grids tried, time, absorbed
+    /// fractions and residuals) is left empty.
+    pub fn from_record(
+        name: &str,
+        index: usize,
+        polygons: usize,
+        record: &hirad_core::image::TableRecord,
+        values: &[f32],
+        visible: &[u8],
+    ) -> Option<Self> {
+        let [tau, albedo, shares, response, shape] = record.lengths().map(|n| n as usize);
+        if values.len() != tau + albedo + shares + response + shape
+            || visible.len() as u64 != record.visible_bytes()
+        {
+            return None;
+        }
+        let grid = |s: u32| DirectionGrid::new(s).ok();
+        let mut at = 0usize;
+        let mut take = |n: usize| {
+            let v = values[at..at + n].to_vec();
+            at += n;
+            v
+        };
+        let single = if record.scatterers > 0 {
+            Some(Scatterers {
+                grid: grid(record.single_side)?,
+                polygons: record.scatterers as usize,
+                shape: Vec::new(),
+                visible: visible.to_vec(),
+                tried: Vec::new(),
+            })
+        } else {
+            None
+        };
+        let mut t = OriginalTables {
+            name: name.to_string(),
+            index,
+            polygons,
+            bands: record.bands as usize,
+            lo: Vec3::from(record.lo),
+            hi: Vec3::from(record.hi),
+            tau_grid: grid(record.tau_side)?,
+            tau: take(tau),
+            albedo: take(albedo),
+            tau_error: record.tau_error,
+            incoming: grid(record.incoming_side)?,
+            outgoing: grid(record.outgoing_side)?,
+            shares: take(shares),
+            response: take(response),
+            single,
+            absorbed: Vec::new(),
+            residual: Vec::new(),
+            scattered_error: record.scattered_error,
+            intensity_error: record.intensity_error,
+            tried: Vec::new(),
+            out_tried: Vec::new(),
+            met: record.flags & hirad_core::image::TABLE_MET != 0,
+            solves: 0,
+            rays: 0,
+            seconds: 0.0,
+        };
+        if let Some(s) = &mut t.single {
+            s.shape = take(shape);
+        }
+        // The values must make sound tables (ranges, lengths, box), as the image's would.
+        t.try_view().ok()?;
+        Some(t)
     }
 
     /// The tables as the core reads them (a bake or a cache entry is always sound).
@@ -123,13 +223,19 @@ impl OriginalTables {
     /// The tables as the scene model and the image store them.
     pub fn to_scene(&self) -> crate::scene::Tables {
         use hirad_core::image::{TABLE_MET, TableRecord};
+        let shape: &[f32] = self.single.as_ref().map_or(&[], |s| &s.shape);
         let mut values = Vec::with_capacity(
-            self.tau.len() + self.albedo.len() + self.shares.len() + self.response.len(),
+            self.tau.len()
+                + self.albedo.len()
+                + self.shares.len()
+                + self.response.len()
+                + shape.len(),
         );
         values.extend_from_slice(&self.tau);
         values.extend_from_slice(&self.albedo);
         values.extend_from_slice(&self.shares);
         values.extend_from_slice(&self.response);
+        values.extend_from_slice(shape);
         crate::scene::Tables {
             original: self.index,
             record: TableRecord {
@@ -145,15 +251,28 @@ impl OriginalTables {
                 tau_error: self.tau_error,
                 scattered_error: self.scattered_error,
                 intensity_error: self.intensity_error,
+                scatterers: self.single.as_ref().map_or(0, |s| s.polygons as u32),
+                single_side: self.single.as_ref().map_or(0, |s| s.grid.side()),
                 reserved: 0,
+                first_visible: 0,
             },
             values,
+            visible: self
+                .single
+                .as_ref()
+                .map_or(Vec::new(), |s| s.visible.clone()),
         }
     }
 
-    /// Bytes of the tables' values (f32 each).
+    /// Bytes of the tables (f32 values, one byte per visible fraction).
     pub fn bytes(&self) -> u64 {
-        4 * (self.tau.len() + self.albedo.len() + self.shares.len() + self.response.len()) as u64
+        let (shape, visible) = self
+            .single
+            .as_ref()
+            .map_or((0, 0), |s| (s.shape.len(), s.visible.len()));
+        4 * (self.tau.len() + self.albedo.len() + self.shares.len() + self.response.len() + shape)
+            as u64
+            + visible as u64
     }
 
     /// Largest |residual| over the incoming cells, per band.

@@ -31,14 +31,19 @@ pub(super) struct Returns {
     cells: usize,
     /// `[((p * 2 + side) * cells + o) * bands + band]`.
     w: Vec<f32>,
+    /// The same for the light that leaves the polygon straight towards the cell (its
+    /// first scattering, from its visible fraction there), when that is kept apart.
+    direct: Option<Vec<f32>>,
 }
 
 impl Returns {
     /// Solves `alone` under a sun of 1 W/m^2 at every cell of `outgoing`; `progress(done,
-    /// total)` after each.
+    /// total)` after each. With `direct` (the polygons' visible fractions towards the
+    /// cells), the part of `W` that is their first scattering is kept too.
     pub fn solve(
         alone: &Alone,
         outgoing: DirectionGrid,
+        direct: Option<&Visibilities>,
         settings: &TableSettings,
         exec: &mut RayonExecutor,
         progress: &mut dyn FnMut(u64, u64),
@@ -49,6 +54,7 @@ impl Returns {
             outgoing.cells() as usize,
         );
         let mut w = vec![0.0f32; polygons * 2 * cells * bands];
+        let mut first = direct.map(|_| vec![0.0f32; w.len()]);
         for o in 0..cells {
             progress(o as u64, cells as u64);
             let s = sample_at(alone, outgoing.direction(o as u32), settings, exec)?;
@@ -67,6 +73,19 @@ impl Returns {
                     w[((p * 2) * cells + o) * bands + b] = m.rho_front[b] * ef + m.tau[b] * eb;
                     w[((p * 2 + 1) * cells + o) * bands + b] = m.rho_back[b] * eb + m.tau[b] * ef;
                 }
+                if let (Some(first), Some(v)) = (&mut first, direct) {
+                    // The sun at `o` straight on the polygon: |cos| x visible fraction, on
+                    // the side facing it.
+                    let c = alone.normals[p].dot(outgoing.direction(o as u32));
+                    let lit = c.abs() * v.fraction(o as u32, p);
+                    let (ef, eb) = if c >= 0.0 { (lit, 0.0) } else { (0.0, lit) };
+                    for b in 0..bands {
+                        first[((p * 2) * cells + o) * bands + b] =
+                            m.rho_front[b] * ef + m.tau[b] * eb;
+                        first[((p * 2 + 1) * cells + o) * bands + b] =
+                            m.rho_back[b] * eb + m.tau[b] * ef;
+                    }
+                }
             }
         }
         progress(cells as u64, cells as u64);
@@ -75,6 +94,7 @@ impl Returns {
             bands,
             cells,
             w,
+            direct: first,
         })
     }
 
@@ -83,6 +103,13 @@ impl Returns {
         let n = self.cells * self.bands;
         let at = (p * 2 + side) * n;
         &self.w[at..at + n]
+    }
+
+    /// The first-scattering part of [`Self::of`] (zeros when it is not kept apart).
+    fn direct_of(&self, p: usize, side: usize) -> &[f32] {
+        let n = self.cells * self.bands;
+        let at = (p * 2 + side) * n;
+        self.direct.as_ref().map_or(&[], |d| &d[at..at + n])
     }
 }
 
@@ -121,7 +148,10 @@ pub(super) fn phase_values(
             // every outgoing cell (times pi).
             let mut intercepted = 0.0f64;
             let mut scattered = [[0.0f64; 8]; 2];
+            // With the first scattering kept apart, `intensity` is the rest and `total` the
+            // whole (for the energy check).
             let mut intensity = vec![[0.0f64; 2]; n_out * bands];
+            let mut total_out = [0.0f64; 8];
             for p in 0..returns.polygons {
                 let cos = alone.normals[p].dot(d);
                 let phi = (alone.areas[p] * cos.abs() * lit.fraction(c, p)) as f64;
@@ -133,8 +163,11 @@ pub(super) fn phase_values(
                 for (b, s) in scattered[side].iter_mut().enumerate().take(bands) {
                     *s += phi * weights.of(p as u32, side)[b] as f64;
                 }
-                for (i, w) in intensity.iter_mut().zip(returns.of(p, side)) {
-                    i[side] += phi * *w as f64;
+                let direct = returns.direct_of(p, side);
+                for (k, (i, w)) in intensity.iter_mut().zip(returns.of(p, side)).enumerate() {
+                    let first = direct.get(k).copied().unwrap_or(0.0);
+                    i[side] += phi * (*w - first) as f64;
+                    total_out[k % bands] += phi * *w as f64;
                 }
             }
             let area = projected_area(alone.lo, alone.hi, d) as f64;
@@ -146,17 +179,18 @@ pub(super) fn phase_values(
             };
             for b in 0..bands {
                 let total = scattered[0][b] + scattered[1][b];
-                let mut out = 0.0f64;
+                let out = total_out[b] / std::f64::consts::PI * omega;
                 for side in 0..2 {
                     let s = scattered[side][b];
                     let on = side_lit(s as f32, total as f32);
                     v.shares[side * bands + b] = if on { (s / total) as f32 } else { 0.0 };
                     for o in 0..n_out {
                         let i = intensity[o * bands + b][side] / std::f64::consts::PI;
-                        out += i * omega;
                         if on && seen[o] > 0.0 {
+                            // The rest after the first scattering may come out a rounding
+                            // below zero where the solve's direct light and the rays' differ.
                             v.response[(o * 2 + side) * bands + b] =
-                                (i / (s * seen[o] as f64)) as f32;
+                                (i / (s * seen[o] as f64)).max(0.0) as f32;
                         }
                     }
                 }

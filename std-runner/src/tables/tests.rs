@@ -91,6 +91,8 @@ fn small_settings() -> TableSettings {
         max_out_side: 16,
         checks: 2,
         out_checks: 2,
+        first_single_side: 32,
+        max_single_side: 128,
         ..TableSettings::default()
     }
 }
@@ -297,12 +299,16 @@ fn the_response_by_reciprocity_agrees_with_solves_that_light_one_side() {
     // The phase table comes from solves under suns at the outgoing cells (reciprocity);
     // here each value at a pair of cell centres is set against a solve under a sun at the
     // incoming centre that lights only the side the table keeps it for, its light read
-    // from the surfaces seen from the outgoing centre.
+    // from the surfaces seen from the outgoing centre. The phase table holds all the
+    // light here (no first scattering kept apart).
     use super::sample::sample_sides;
     // Two clumps: leaves of 0.4 m (close to touching) and of 0.15 m (sparse).
     for (size, seed) in [(0.4f32, 3u32), (0.15, 11)] {
         let scene = clump(size, seed);
-        let settings = small_settings();
+        let settings = TableSettings {
+            max_single_side: 0,
+            ..small_settings()
+        };
         let mut exec = RayonExecutor::new(2).unwrap();
         let t = bake_original(&scene, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
         let view = t.view();
@@ -337,5 +343,64 @@ fn the_response_by_reciprocity_agrees_with_solves_that_light_one_side() {
             }
         }
         assert!(compared >= 32, "clump of {size} m: {compared}");
+    }
+}
+
+#[test]
+fn the_first_scattering_kept_apart_and_the_rest_add_up_to_a_solves_light() {
+    // With the polygons' first scattering kept apart, the phase table holds the rest. At
+    // pairs of cell centres, set against a solve under a sun at the incoming centre (its
+    // light read from the surfaces seen from the outgoing centre): the rest plus the first
+    // scattering from visible fractions cast at those directions (the decomposition), and
+    // the table's whole intensity (the fractions interpolated on their grid). The same
+    // clumps as above; the first scattering is most of their light.
+    for (size, seed) in [(0.4f32, 3u32), (0.15, 11)] {
+        let scene = clump(size, seed);
+        let settings = small_settings();
+        let mut exec = RayonExecutor::new(2).unwrap();
+        let t = bake_original(&scene, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
+        let single = t
+            .single
+            .as_ref()
+            .expect("a clump of 8 leaves keeps its first scattering");
+        assert_eq!(single.polygons, 8);
+        let view = t.view();
+        let alone = super::Alone::new(&scene, 0).unwrap();
+        let (mut compared, mut first_share, mut worst) = (0, 0.0f32, 0.0f32);
+        for k in 0..6u32 {
+            let d = t.incoming.direction(hash3(9, k, 1) % t.incoming.cells());
+            let s = super::sample_at(&alone, d, &settings, &mut exec).unwrap();
+            let vd = alone.visible(d, 15, k);
+            for j in 0..4u32 {
+                let o = t
+                    .outgoing
+                    .direction(hash3(9, k * 8 + j, 2) % t.outgoing.cells());
+                let (i, _) = s.intensity(&alone, o, 12, j);
+                let vo = alone.visible(o, 15, 100 + j);
+                for (b, &light) in i.iter().enumerate().take(2) {
+                    let mean = s.scattered[b] * s.area / (4.0 * std::f32::consts::PI);
+                    let scale = light.max(mean);
+                    let first =
+                        super::single_bake::first_scattering(&alone, d, o, b, |p| vd[p], |p| vo[p]);
+                    let sum = first + view.response_intensity(d, o, b);
+                    assert!(
+                        (sum - light).abs() < 0.04 * scale,
+                        "clump {size}: sun {d} to {o} band {b}: {sum} vs {light}"
+                    );
+                    worst = worst.max((view.intensity(d, o, b) - light).abs() / scale);
+                    first_share = first_share.max(first / scale);
+                    compared += 1;
+                }
+            }
+        }
+        assert_eq!(compared, 48);
+        assert!(first_share > 0.5, "clump {size}: {first_share}");
+        if size > 0.3 {
+            assert!(worst < 0.04, "clump {size}: the table's intensity {worst}");
+        } else {
+            // Small leaves far apart: each one's shadows move across it within a few
+            // degrees, so the bake had to refine the grid of visible fractions.
+            assert!(single.tried.len() > 1, "{:?}", single.tried);
+        }
     }
 }

@@ -8,8 +8,9 @@ use hirad_core::image::{
     Header, ImageErrorKind as K, SceneView, Section, SliceSource, TABLE_MET, TableRecord,
 };
 
-/// Tables with small grids and values that tell their place.
-fn tables(original: usize, bands: u32) -> Tables {
+/// Tables with small grids and values that tell their place, with `scatterers` polygons'
+/// first scattering kept apart on a grid of side 2.
+fn tables(original: usize, bands: u32, scatterers: u32) -> Tables {
     let record = TableRecord {
         original: 0,
         bands,
@@ -23,18 +24,32 @@ fn tables(original: usize, bands: u32) -> Tables {
         tau_error: 0.01,
         scattered_error: 0.02,
         intensity_error: 0.03,
+        scatterers,
+        single_side: if scatterers > 0 { 2 } else { 0 },
         reserved: 0,
+        first_visible: 0,
     };
-    let [tau, albedo, shares, response] = record.lengths();
+    let [tau, albedo, shares, response, _] = record.lengths();
     let mut values = Vec::new();
     values.extend((0..tau).map(|i| 0.1 * i as f32));
     values.extend((0..albedo).map(|i| 0.5 + 0.01 * i as f32));
     values.extend((0..shares).map(|i| 0.25 + 0.005 * i as f32));
     values.extend((0..response).map(|i| 2.0 + i as f32));
+    for p in 0..scatterers {
+        // A unit normal, an area, then per band the two reflectances and the transmittance.
+        values.extend([0.6, 0.0, 0.8, 0.01 * (1 + p) as f32]);
+        for b in 0..bands {
+            values.extend([0.1, 0.2 + 0.1 * b as f32, 0.3]);
+        }
+    }
+    let visible = (0..record.visible_bytes())
+        .map(|i| (i * 37) as u8)
+        .collect();
     Tables {
         original,
         record,
         values,
+        visible,
     }
 }
 
@@ -60,7 +75,7 @@ fn scene() -> crate::scene::Scene {
         leaf,
     ];
     s.root.children[0].instance.as_mut().unwrap().original = 0;
-    s.tables = vec![tables(0, 2), tables(1, 2)];
+    s.tables = vec![tables(0, 2, 0), tables(1, 2, 2)];
     s.tables[1].values[0] = 0.75;
     s
 }
@@ -81,7 +96,9 @@ fn tables_survive_compile_and_decompile() {
     let holder = back.original_index("holder").unwrap();
     let of = |o: usize| back.tables.iter().find(|t| t.original == o).unwrap();
     assert_eq!(of(leaf).values, s.tables[1].values);
+    assert_eq!(of(leaf).visible, s.tables[1].visible);
     assert_eq!(of(holder).values, s.tables[0].values);
+    assert!(of(holder).visible.is_empty());
     assert_eq!(of(leaf).record.tau_error, 0.01);
     let table = view
         .table_of(hirad_core::OriginalId(leaf as u32))
@@ -105,6 +122,14 @@ fn compile_refuses_tables_that_do_not_fit() {
             .contains("values where their grids need")
     );
     let mut s = scene();
+    s.tables[1].visible.pop();
+    assert!(
+        compile(&s)
+            .unwrap_err()
+            .message
+            .contains("visible fractions where their grid needs")
+    );
+    let mut s = scene();
     s.tables[1].original = 0;
     assert!(compile(&s).unwrap_err().message.contains("two tables"));
     let mut s = scene();
@@ -119,6 +144,15 @@ fn damaged_tables_are_refused_where_they_are_damaged() {
     let rec = h.section(Section::Tables).offset as usize;
     let pool = h.section(Section::TableValues).offset as usize;
     let size = std::mem::size_of::<TableRecord>();
+    // The leaf's table is the first (compile puts the leaf first); its scatterers' shapes
+    // follow its response.
+    let leaf = SceneView::open(SliceSource(&bytes))
+        .unwrap()
+        .table(0)
+        .unwrap();
+    assert_eq!(leaf.scatterers, 2);
+    let [tau, albedo, shares, response, _] = leaf.lengths();
+    let shape = (tau + albedo + shares + response) as usize;
     type Damage = (&'static str, usize, Box<dyn Fn(&mut [u8])>, fn(&K) -> bool);
     let put_u32 =
         |at: usize, v: u32| move |b: &mut [u8]| b[at..at + 4].copy_from_slice(&v.to_le_bytes());
@@ -171,6 +205,42 @@ fn damaged_tables_are_refused_where_they_are_damaged() {
             |k| matches!(k, K::TableValue { table: 0, index: 5 }),
         ),
         (
+            "scatterers without their grid",
+            rec + 72,
+            Box::new(put_u32(rec + 72, 0)),
+            |k| matches!(k, K::TableGrid { table: 0 }),
+        ),
+        (
+            "a grid without scatterers",
+            rec + size + 72,
+            Box::new(put_u32(rec + size + 72, 4)),
+            |k| matches!(k, K::TableGrid { table: 1 }),
+        ),
+        (
+            "first visible fraction",
+            rec + size + 80,
+            Box::new(put_u32(rec + size + 80, 1)),
+            |k| matches!(k, K::TableRange { table: 1 }),
+        ),
+        (
+            "normal not unit",
+            pool + 4 * (shape + 2),
+            Box::new(put_f32(pool + 4 * (shape + 2), 0.5)),
+            |k| matches!(k, K::TableValue { table: 0, .. }),
+        ),
+        (
+            "negative area",
+            pool + 4 * (shape + 3),
+            Box::new(put_f32(pool + 4 * (shape + 3), -1.0)),
+            |k| matches!(k, K::TableValue { table: 0, .. }),
+        ),
+        (
+            "transmittance above 1",
+            pool + 4 * (shape + 10 + 6),
+            Box::new(put_f32(pool + 4 * (shape + 16), 1.01)),
+            |k| matches!(k, K::TableValue { table: 0, .. }),
+        ),
+        (
             "response not finite",
             pool + 4 * 30,
             Box::new(put_f32(pool + 4 * 30, f32::INFINITY)),
@@ -185,6 +255,7 @@ fn damaged_tables_are_refused_where_they_are_damaged() {
             },
         ),
     ];
+    // (The value's index is its byte: checked below.)
     for (what, at, damage, expected) in damages {
         let mut b = bytes.clone();
         damage(&mut b);

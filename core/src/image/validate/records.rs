@@ -157,13 +157,15 @@ pub(super) fn check_cameras<S: SceneSource>(src: &S, h: &Header) -> Result<(), I
 
 /// The tables: each names an original (in increasing order), has the image's bands, grid
 /// sides within the grid's range and a finite ordered box; their values follow each other
-/// in the pool, which holds nothing else, and each value is within its range.
+/// in the pool, which holds nothing else, and each value is within its range; so do their
+/// scatterers' visible fractions in the visibility pool.
 pub(super) fn check_tables<S: SceneSource>(src: &S, h: &Header) -> Result<u32, ImageError> {
     let originals = h.section(Section::Originals).count;
     let pool = h.section(Section::TableValues).count;
+    let visibility = h.section(Section::TableVisibility).count;
     let mut w: Window<TableRecord, 16> = Window::new(Section::Tables);
     let mut v: Window<f32, 256> = Window::new(Section::TableValues);
-    let mut next = 0u64;
+    let (mut next, mut next_visible) = (0u64, 0u64);
     let mut previous: Option<u32> = None;
     let count = h.section(Section::Tables).count;
     for i in 0..count {
@@ -174,10 +176,16 @@ pub(super) fn check_tables<S: SceneSource>(src: &S, h: &Header) -> Result<u32, I
         }
         previous = Some(t.original);
         let side_ok = |s: u32| (1..=crate::tables::grid::MAX_SIDE).contains(&s);
+        let single_ok = if t.scatterers == 0 {
+            t.single_side == 0
+        } else {
+            side_ok(t.single_side)
+        };
         if t.bands != h.bands
             || !side_ok(t.tau_side)
             || !side_ok(t.incoming_side)
             || !side_ok(t.outgoing_side)
+            || !single_ok
             || t.flags & !TABLE_MET != 0
             || t.reserved != 0
         {
@@ -195,17 +203,39 @@ pub(super) fn check_tables<S: SceneSource>(src: &S, h: &Header) -> Result<u32, I
         if t.first != next || t.values() > pool.saturating_sub(next) {
             return err(h, Section::Tables, i, K::TableRange { table });
         }
-        let [tau, albedo, shares, _] = t.lengths();
+        if t.first_visible != next_visible
+            || t.visible_bytes() > visibility.saturating_sub(next_visible)
+        {
+            return err(h, Section::Tables, i, K::TableRange { table });
+        }
+        let [tau, albedo, shares, response, _] = t.lengths();
+        let stride = crate::tables::single::shape_stride(t.bands as usize) as u64;
+        let mut normal = [0.0f32; 3];
         for k in 0..t.values() {
             let x = v.get(src, h, next + k)?;
-            let max = if k < tau {
-                1.0
+            let ok = if k < tau {
+                (0.0..=1.0).contains(&x)
             } else if k < tau + albedo + shares {
-                1.0 + 1e-3
+                (0.0..=1.0 + 1e-3).contains(&x)
+            } else if k < tau + albedo + shares + response {
+                x.is_finite() && x >= 0.0
             } else {
-                f32::MAX
+                // A scatterer's shape: a unit normal, an area, materials within 0..=1.
+                let j = ((k - tau - albedo - shares - response) % stride) as usize;
+                match j {
+                    0..=2 => {
+                        normal[j] = x;
+                        x.is_finite()
+                            && (j < 2 || {
+                                let n = Vec3::from(normal);
+                                (n.length() - 1.0).abs() <= 1e-3
+                            })
+                    }
+                    3 => x.is_finite() && x >= 0.0,
+                    _ => (0.0..=1.0).contains(&x),
+                }
             };
-            if !x.is_finite() || !(0.0..=max).contains(&x) {
+            if !ok {
                 return err(
                     h,
                     Section::TableValues,
@@ -215,15 +245,18 @@ pub(super) fn check_tables<S: SceneSource>(src: &S, h: &Header) -> Result<u32, I
             }
         }
         next += t.values();
+        next_visible += t.visible_bytes();
     }
+    let table = count as u32;
     if next != pool {
+        return err(h, Section::TableValues, next, K::TableRange { table });
+    }
+    if next_visible != visibility {
         return err(
             h,
-            Section::TableValues,
-            next,
-            K::TableRange {
-                table: count as u32,
-            },
+            Section::TableVisibility,
+            next_visible,
+            K::TableRange { table },
         );
     }
     Ok(count as u32)
