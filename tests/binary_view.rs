@@ -311,6 +311,7 @@ impl Raw {
             &[],
             &[],
             &[],
+            &[],
         ];
         let mut counts = [0u64; SECTION_COUNT];
         for s in Section::ALL {
