@@ -342,7 +342,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     if !unmet.is_empty() {
         return Err(crate::exit::not_right(anyhow::anyhow!(
-            "the tables of {} did not meet their error targets on the finest grids allowed (see above; --max-side, --max-out-side, --max-tau-side)",
+            "the tables of {} did not meet their error targets on the finest grids allowed (see above; --max-side, --max-out-side, --max-tau-side, --max-single-side)",
             unmet.join(", ")
         )));
     }

@@ -10,6 +10,8 @@
 //! a sun at each outgoing cell, `W_ps(o) = rho_s E_ps(o) + tau E_p(other side)(o)`, the
 //! intensity for any sun is `I(d, o) = sum_ps Phi_ps(d) W_ps(o) / pi`, kept apart by the
 //! side lit, and the incoming grid costs rays: as fine as a sun near a leaf's plane needs.
+//! Where the polygons' first scattering is kept apart (see [`super::single_bake`]), the part
+//! of `W` that is light straight from the sun at `o` is taken out: the table holds the rest.
 
 use super::bake::TableSettings;
 use super::intercept::EscapeWeights;
