@@ -42,7 +42,7 @@ seed() {
       # An image with directional tables (small grids, so that it stays under -max_len; the
       # targets are not met, which exits 1 after writing it).
       "$ROOT/target/release/hirad" tables -q "$ROOT/fixtures/small_plant.hir" --max-side 4 \
-        --max-tau-side 4 --max-out-side 8 --tau-target 1 \
+        --max-tau-side 4 --max-out-side 8 --max-single-side 4 --tau-target 1 \
         -o "corpus/$target/small_plant_tables.hirb" >/dev/null 2>&1 || true ;;
   esac
 }
