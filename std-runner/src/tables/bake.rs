@@ -70,9 +70,11 @@ pub struct TableSettings {
     pub single_target: f32,
     /// Largest relative error of the interpolated scattered fraction.
     pub scattered_target: f32,
-    /// Largest relative error of the interpolated intensity (see
-    /// [`OriginalTables::intensity_error`]).
+    /// The grids are made finer until the interpolated intensity's error (see
+    /// [`OriginalTables::intensity_error`]) is at most this, or they reach their largest.
     pub intensity_target: f32,
+    /// The tables meet their targets only if that error is at most this.
+    pub intensity_limit: f32,
     /// Incoming check directions (each one solve).
     pub checks: u32,
     /// Outgoing check directions per incoming check direction.
@@ -121,6 +123,7 @@ impl Default for TableSettings {
             // The grids are held to 3% at the bake's own check directions so that other
             // directions stay within 5%.
             intensity_target: 0.03,
+            intensity_limit: 0.05,
             checks: 16,
             out_checks: 8,
             seed: 1,
@@ -418,10 +421,12 @@ pub fn bake_alone(
         t.tried = tried.clone();
         t.scattered_error = s_err;
         t.intensity_error = i_err;
-        let met = t.scattered_error <= settings.scattered_target
+        let aimed = t.scattered_error <= settings.scattered_target
             && t.intensity_error <= settings.intensity_target;
-        if met || side * 2 > settings.max_side {
-            t.met = met && tt.met;
+        if aimed || side * 2 > settings.max_side {
+            t.met = tt.met
+                && t.scattered_error <= settings.scattered_target
+                && t.intensity_error <= settings.intensity_limit;
             t.seconds = start.elapsed().as_secs_f64();
             return Ok(t);
         }
