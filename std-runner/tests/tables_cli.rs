@@ -81,6 +81,10 @@ fn a_twigs_tables_are_written_and_judged() {
     for r in residual[..residual.find(']').unwrap()].split(',') {
         assert!(r.trim().parse::<f64>().unwrap().abs() < 0.01, "{json}");
     }
+    // The twig's 4 polygons keep their first scattering apart, on a grid of their own.
+    assert_eq!(number(&json, "scatterers"), 4.0, "{json}");
+    assert!(number(&json, "single_side") >= 32.0, "{json}");
+    assert!(stdout.contains("first scattering of its 4 polygons kept apart"), "{stdout}");
     // One row per band and incoming cell; the bidirectional file per outgoing cell too.
     let side_in = number(&json, "incoming_side") as usize;
     let side_out = number(&json, "outgoing_side") as usize;
@@ -123,6 +127,11 @@ fn bad_requests_are_usage_errors() {
     );
     let err = fails_with(2, &["tables", s(&plant), "--max-side", "2", "--no-cache"]);
     assert!(err.contains("--max-side 2"), "{err}");
+    let err = fails_with(
+        2,
+        &["tables", s(&plant), "--max-single-side", "2", "--no-cache"],
+    );
+    assert!(err.contains("--max-single-side 2"), "{err}");
     let err = fails_with(2, &["tables", s(&plant), "--epsilon", "0", "--no-cache"]);
     assert!(err.contains("--epsilon"), "{err}");
     // A scene without instances has no table to make, and says so.
