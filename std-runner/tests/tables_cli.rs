@@ -84,7 +84,10 @@ fn a_twigs_tables_are_written_and_judged() {
     // The twig's 4 polygons keep their first scattering apart, on a grid of their own.
     assert_eq!(number(&json, "scatterers"), 4.0, "{json}");
     assert!(number(&json, "single_side") >= 32.0, "{json}");
-    assert!(stdout.contains("first scattering of its 4 polygons kept apart"), "{stdout}");
+    assert!(
+        stdout.contains("first scattering of its 4 polygons kept apart"),
+        "{stdout}"
+    );
     // One row per band and incoming cell; the bidirectional file per outgoing cell too.
     let side_in = number(&json, "incoming_side") as usize;
     let side_out = number(&json, "outgoing_side") as usize;
