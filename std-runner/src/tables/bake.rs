@@ -252,22 +252,19 @@ pub fn bake_alone(
 
     // The polygons' first scattering, kept apart when the original is small enough: the
     // phase table then holds the light scattered more than once, which is smooth.
-    let single = bake_single(alone, &checks, &name, settings, &mut rays, progress)?;
+    // With it, the check suns' reach on each polygon, for the first scattering at the
+    // outgoing cells.
+    let (single, sun_seen) =
+        match bake_single(alone, &checks, &name, settings, &mut rays, progress)? {
+            Some(s) => (Some(s.scatterers), s.sun_seen),
+            None => (None, Vec::new()),
+        };
     let single_view = single
         .as_ref()
         .map(|s| SingleScatter::new(s.grid, bands, s.polygons, &s.shape, &s.visible))
         .transpose()
         .map_err(|e| anyhow!("{name}: first scattering: {e:?}"))?;
     let k = settings.single_rays.clamp(1, 15);
-    // The check suns' reach on each polygon, for the first scattering at the outgoing cells.
-    let sun_seen: Vec<Vec<f32>> = match single_view {
-        Some(_) => checks
-            .iter()
-            .enumerate()
-            .map(|(i, c)| alone.visible(c.sample.source, k, hash3(settings.seed, i as u32, 0x51)))
-            .collect(),
-        None => Vec::new(),
-    };
 
     // The outgoing grid: the check suns' light, measured on the grid and interpolated at
     // the outgoing check directions.

@@ -48,6 +48,13 @@ pub(super) fn first_scattering(
         .sum()
 }
 
+/// The scatterers of an original, and each check sun's visible fractions (cast at its
+/// direction, per polygon), which the outgoing grid's refinement uses too.
+pub(super) struct Single {
+    pub scatterers: Scatterers,
+    pub sun_seen: Vec<Vec<f32>>,
+}
+
 /// Bakes the scatterers of `alone`, or `None` when its visible fractions would not fit
 /// `settings.max_single_bytes` on the first grid (or `max_single_side` is 0). `rays` counts
 /// the rays cast.
@@ -58,7 +65,7 @@ pub(super) fn bake_single(
     settings: &TableSettings,
     rays: &mut u64,
     progress: &mut dyn FnMut(&str, u64, u64),
-) -> Result<Option<Scatterers>> {
+) -> Result<Option<Single>> {
     let n = alone.polygons.len();
     let fits = |side: u32| (side as u64).pow(2) * n as u64 <= settings.max_single_bytes;
     let mut side = settings.first_single_side.min(settings.max_single_side);
@@ -132,12 +139,15 @@ pub(super) fn bake_single(
         );
         if worst <= settings.single_target || side * 2 > settings.max_single_side || !fits(side * 2)
         {
-            return Ok(Some(Scatterers {
-                grid,
-                polygons: n,
-                shape,
-                visible,
-                tried,
+            return Ok(Some(Single {
+                scatterers: Scatterers {
+                    grid,
+                    polygons: n,
+                    shape,
+                    visible,
+                    tried,
+                },
+                sun_seen: exact.into_iter().map(|(vd, _)| vd).collect(),
             }));
         }
         side *= 2;
