@@ -70,10 +70,13 @@ impl Returns {
                         .copied()
                         .unwrap_or(0.0)
                 };
+                // Per side, what leaves it per unit irradiance on the fronts (ef) and backs (eb).
+                let put = |out: &mut [f32], b: usize, ef: f32, eb: f32| {
+                    out[((p * 2) * cells + o) * bands + b] = m.rho_front[b] * ef + m.tau[b] * eb;
+                    out[((p * 2 + 1) * cells + o) * bands + b] = m.rho_back[b] * eb + m.tau[b] * ef;
+                };
                 for b in 0..bands {
-                    let (ef, eb) = (e(0, b), e(1, b));
-                    w[((p * 2) * cells + o) * bands + b] = m.rho_front[b] * ef + m.tau[b] * eb;
-                    w[((p * 2 + 1) * cells + o) * bands + b] = m.rho_back[b] * eb + m.tau[b] * ef;
+                    put(&mut w, b, e(0, b), e(1, b));
                 }
                 if let (Some(first), Some(v)) = (&mut first, direct) {
                     // The sun at `o` straight on the polygon: |cos| x visible fraction, on
@@ -82,10 +85,7 @@ impl Returns {
                     let lit = c.abs() * v.fraction(o as u32, p);
                     let (ef, eb) = if c >= 0.0 { (lit, 0.0) } else { (0.0, lit) };
                     for b in 0..bands {
-                        first[((p * 2) * cells + o) * bands + b] =
-                            m.rho_front[b] * ef + m.tau[b] * eb;
-                        first[((p * 2 + 1) * cells + o) * bands + b] =
-                            m.rho_back[b] * eb + m.tau[b] * ef;
+                        put(first, b, ef, eb);
                     }
                 }
             }
