@@ -1,6 +1,8 @@
 //! Hooks for the benchmarks (`benches/hr.rs`): one phase of a solve at a time, from a state
 //! that can be copied with its workspace and run again. Not a stable interface.
 
+use super::plan::aligned;
+use super::run::parts;
 use super::*;
 
 /// A solve stopped between phases (the workspace bytes hold the rest).

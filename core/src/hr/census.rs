@@ -4,7 +4,7 @@
 //! and loading, so that the plan is exact. One pass over the image; originals are counted
 //! once and remembered in a small caller-provided scratch.
 
-use super::HrError;
+use super::error::HrError;
 use crate::image::{SceneSource, SceneView};
 use crate::limits::MAX_NODE_DEPTH;
 use crate::material::TWO_SIDED;

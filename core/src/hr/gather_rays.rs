@@ -16,7 +16,7 @@ const AUTO_CAP: f64 = 65_536.0;
 const AUTO_MAX: u32 = 262_144;
 const AUTO_MIN: u32 = 64;
 
-/// Rays per receiving side: the setting, or (for [`super::Settings::AUTO`]) a budget of
+/// Rays per receiving side: the setting, or (for [`super::settings::Settings::AUTO`]) a budget of
 /// [`AUTO_BUDGET`] x (1e-3 / epsilon) rays spread over all receiving sides, at least
 /// [`AUTO_MIN`] and at most [`AUTO_CAP`] x (1e-5 / epsilon) per side. Rounded to a square
 /// (points and directions are both stratified on a grid).
@@ -25,7 +25,7 @@ pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
     if asked == 0 {
         return 0;
     }
-    let n = if asked == super::Settings::AUTO {
+    let n = if asked == super::settings::Settings::AUTO {
         let mut sides = 0u64;
         for i in 0..st.polygons {
             sides += State::sides(Elem(st.polygon(ws, i).root)) as u64;
@@ -53,7 +53,7 @@ pub(crate) fn polygon_rays(st: &State, full: u32, area: f32) -> u32 {
         return full;
     }
     let boost = libm::sqrtf(area / typical).min(LARGE_BOOST);
-    (full as f32 * boost).min(super::Settings::MAX_FINAL_RAYS as f32) as u32
+    (full as f32 * boost).min(super::settings::Settings::MAX_FINAL_RAYS as f32) as u32
 }
 
 /// Most times the rays of a polygon of typical size that a large polygon casts per side.

@@ -5,9 +5,9 @@
 //! values, child lists, sources, the loading stack, grouping scratch, the executor's scratch
 //! and the block tables. The rest is cut into blocks shared by the growing pools.
 
-use super::Settings;
 use super::census::Census;
 use super::records::*;
+use super::settings::Settings;
 
 /// Growing pools sharing the blocks: one-sided patches, two-sided patches, links, emission
 /// bins of large clusters.

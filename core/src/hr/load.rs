@@ -5,12 +5,13 @@
 //! push-pull passes are then plain forward and backward loops.
 
 use super::census::Census;
+use super::error::HrError;
 use super::ids::{Elem, Kind};
 use super::layout::{FRAME_BYTES, GROUP_ITEM_BYTES, Layout};
 use super::pool::{Blocks, Pool, read, write};
 use super::records::*;
+use super::settings::{Settings, Stats};
 use super::state::State;
-use super::{HrError, Settings, Stats};
 use crate::geometry::{Aabb, Similarity, polygon_shape};
 use crate::image::{SceneSource, SceneView};
 use crate::limits::{MAX_BANDS, NONE};

@@ -69,8 +69,8 @@ fn leaving_power(st: &State, ws: &[u8]) -> Leaving {
 }
 
 /// The relighting passes before the polygons' gather: as many as the settings ask, or
-/// (for [`super::Settings::AUTO`]) until one moves the leaving light by less than
-/// [`SETTLED`] of what enters, at most [`super::MAX_FINAL_PASSES`] passes in all. Records
+/// (for [`super::settings::Settings::AUTO`]) until one moves the leaving light by less than
+/// [`SETTLED`] of what enters, at most [`super::settings::MAX_FINAL_PASSES`] passes in all. Records
 /// the passes (the polygons' own included), the last pass's move and the rays in the stats.
 pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     st: &mut State,
@@ -80,8 +80,12 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     progress: &mut dyn Progress,
 ) {
     let asked = st.settings.final_passes;
-    let auto = asked == super::Settings::AUTO;
-    let passes = if auto { super::MAX_FINAL_PASSES } else { asked };
+    let auto = asked == super::settings::Settings::AUTO;
+    let passes = if auto {
+        super::settings::MAX_FINAL_PASSES
+    } else {
+        asked
+    };
     if passes > 1 {
         st.take_corrections(ws);
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);

@@ -5,7 +5,7 @@ use super::ids::{Elem, Kind};
 use super::layout::Layout;
 use super::pool::{Blocks, Pool, floats, floats_mut, read, write};
 use super::records::*;
-use super::{Settings, Stats};
+use super::settings::{Settings, Stats};
 use crate::limits::NONE;
 use glam::Vec3;
 
