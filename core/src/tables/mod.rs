@@ -2,9 +2,11 @@
 //! functions of direction (issue 17). The direction grid they are sampled on, the box's
 //! projected area, the uncollided transmittance and its table baked to an error target, the
 //! light leaving a box towards a direction, the phase table, and the polygons' first
-//! scattering kept apart.
+//! scattering kept apart; and a closed instance: the tables placed by its transform, with the
+//! light it received.
 
 pub mod bake;
+pub mod closed;
 pub mod directional;
 pub mod grid;
 pub mod outgoing;
@@ -14,6 +16,8 @@ pub mod tau;
 
 #[cfg(test)]
 mod tests_bake;
+#[cfg(test)]
+mod tests_closed;
 #[cfg(test)]
 mod tests_grid;
 #[cfg(test)]

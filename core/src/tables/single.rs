@@ -136,12 +136,24 @@ impl<'a> SingleScatter<'a> {
 
     /// Polygon `p`'s visible fraction towards `d`, interpolated (0..=1) over the weights
     /// `w` of `d` on the grid.
-    fn fraction(&self, w: &[(u32, f32); 4], p: usize) -> f32 {
+    pub(crate) fn fraction(&self, w: &[(u32, f32); 4], p: usize) -> f32 {
         let mut v = 0.0;
         for &(c, x) in w {
             v += x * self.visible[c as usize * self.polygons + p] as f32;
         }
         v / VISIBLE_ONE as f32
+    }
+
+    /// Polygon `p`'s unit normal and area (m^2) in the original's frame, and its front
+    /// reflectance, back reflectance and transmittance in band `band`.
+    pub fn polygon(&self, p: usize, band: usize) -> (Vec3, f32, [f32; 3]) {
+        let s = &self.shape[p * shape_stride(self.bands)..];
+        let m = GEOMETRY + 3 * band;
+        (
+            Vec3::new(s[0], s[1], s[2]),
+            s[3],
+            [s[m], s[m + 1], s[m + 2]],
+        )
     }
 
     /// Intensity (m^2/sr) towards `observer` in band `band` of the light the polygons

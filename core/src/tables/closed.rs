@@ -1,0 +1,303 @@
+//! A closed instance inside a level (DESIGN.md "Instances inside a level"): its original's
+//! tables placed in the world by the instance's transform, and the light it has received,
+//! kept in the form its outgoing intensity needs.
+//!
+//! Light reaches a closed instance as beams: a sun, a sky direction, a link from an element
+//! of the level, each an irradiance on a plane facing the source (W/m^2 per band) and the
+//! direction towards the source. Nothing is binned: each beam adds, at its own direction,
+//! - to every polygon whose first scattering the tables keep (see [`super::single`]), the
+//!   irradiance that reaches its lit side, `E |n.d| V_p(d)` (W/m^2, per side and band);
+//! - to the phase table's incoming cells around its direction, by their interpolation
+//!   weights, the power scattered more than once (W per unit response);
+//! - to the power the contents intercept and scatter out (W, per band).
+//!
+//! The intensity towards any observer is then one sum over the polygons and the incoming
+//! cells: exactly `sum_beams E DirectionalTables::intensity(d, o)`, at a cost that does not
+//! grow with the number of beams. Areas and intensities scale with the square of the
+//! instance's scale; directions turn with its rotation.
+
+use super::directional::DirectionalTables;
+use super::phase::{LIT_SHARE, TableError, side_lit};
+use crate::geometry::{Aabb, Similarity};
+use glam::Vec3;
+
+/// An original's tables placed in the world by an instance's transform.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placed<'a> {
+    tables: DirectionalTables<'a>,
+    place: Similarity,
+    /// `place.scale` squared: how areas and intensities grow.
+    area_scale: f32,
+}
+
+impl<'a> Placed<'a> {
+    /// The tables of an original placed by `place` (the instance's transform to world).
+    pub fn new(tables: DirectionalTables<'a>, place: Similarity) -> Self {
+        Self {
+            tables,
+            place,
+            area_scale: place.scale * place.scale,
+        }
+    }
+
+    /// The original's tables.
+    pub fn tables(&self) -> &DirectionalTables<'a> {
+        &self.tables
+    }
+
+    /// The transform to world.
+    pub fn place(&self) -> Similarity {
+        self.place
+    }
+
+    /// A world direction in the original's frame (unit).
+    pub fn local(&self, d: Vec3) -> Vec3 {
+        (self.place.rotation.conjugate() * d).normalize_or_zero()
+    }
+
+    /// A world point in the original's frame.
+    fn local_point(&self, x: Vec3) -> Vec3 {
+        self.place.rotation.conjugate() * (x - self.place.translation) / self.place.scale
+    }
+
+    /// A world box that holds the placed box (m).
+    pub fn bounds(&self) -> Aabb {
+        let (lo, hi) = self.tables.bounds();
+        self.place.aabb(&Aabb::new(lo, hi))
+    }
+
+    /// Uncollided transmittance along the world direction `d` (0..=1).
+    pub fn tau(&self, d: Vec3) -> f32 {
+        self.tables.tau(self.local(d))
+    }
+
+    /// The box's projected area along the world direction `d` (m^2).
+    pub fn area(&self, d: Vec3) -> f32 {
+        self.area_scale * self.tables.area(self.local(d))
+    }
+
+    /// The contents' cross-section along the world direction `d`, `(1 - tau) A` (m^2): the
+    /// area that intercepts a beam from there, and the area an observer there sees glow.
+    pub fn shadow(&self, d: Vec3) -> f32 {
+        self.area_scale * self.tables.shadow(self.local(d))
+    }
+
+    /// Power scattered out in band `band` for a sun of 1 W/m^2 towards the world direction
+    /// `source` (m^2).
+    pub fn scattered(&self, source: Vec3, band: usize) -> f32 {
+        self.area_scale * self.tables.scattered(self.local(source), band)
+    }
+
+    /// Intensity towards the world direction `observer` in band `band` for a sun of
+    /// 1 W/m^2 towards `source` (m^2/sr).
+    pub fn intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
+        self.area_scale
+            * self
+                .tables
+                .intensity(self.local(source), self.local(observer), band)
+    }
+
+    /// True when the segment from `from` to `to` (world, m) crosses the placed box: a ray
+    /// along it is attenuated by `tau` of its direction.
+    pub fn crosses(&self, from: Vec3, to: Vec3) -> bool {
+        let (lo, hi) = self.tables.bounds();
+        let (a, b) = (self.local_point(from), self.local_point(to));
+        let d = b - a;
+        let (mut t0, mut t1) = (0.0f32, 1.0f32);
+        for k in 0..3 {
+            if d[k] == 0.0 {
+                if a[k] < lo[k] || a[k] > hi[k] {
+                    return false;
+                }
+                continue;
+            }
+            let (mut ta, mut tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+            if ta > tb {
+                core::mem::swap(&mut ta, &mut tb);
+            }
+            t0 = t0.max(ta);
+            t1 = t1.min(tb);
+            if t0 > t1 {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Floats of storage the light received by this instance needs (see [`Received`]).
+    pub fn received_len(&self) -> usize {
+        let bands = self.tables.phase().bands();
+        let polygons = self.tables.single().map_or(0, |s| s.polygons());
+        let cells = self.tables.phase().incoming().cells() as usize;
+        2 * bands + 2 * bands * (polygons + cells)
+    }
+}
+
+/// The light a closed instance has received, over caller storage of
+/// [`Placed::received_len`] floats: per band the power intercepted and scattered out (W),
+/// per polygon kept apart and side lit the irradiance on it (W/m^2, original's units), per
+/// incoming cell and side lit the scattered power's weight (W).
+#[derive(Debug)]
+pub struct Received<'s> {
+    values: &'s mut [f32],
+    bands: usize,
+    polygons: usize,
+}
+
+impl<'s> Received<'s> {
+    /// Storage for the light `placed` receives, cleared.
+    pub fn new(placed: &Placed<'_>, values: &'s mut [f32]) -> Result<Self, TableError> {
+        let expected = placed.received_len();
+        if values.len() != expected {
+            return Err(TableError::Length {
+                expected: expected as u64,
+                given: values.len() as u64,
+            });
+        }
+        values.fill(0.0);
+        Ok(Self {
+            values,
+            bands: placed.tables.phase().bands(),
+            polygons: placed.tables.single().map_or(0, |s| s.polygons()),
+        })
+    }
+
+    /// Forgets all light received.
+    pub fn clear(&mut self) {
+        self.values.fill(0.0);
+    }
+
+    fn polygon_at(&self, p: usize, side: usize, band: usize) -> usize {
+        2 * self.bands + (p * 2 + side) * self.bands + band
+    }
+
+    fn cell_at(&self, cell: usize, side: usize, band: usize) -> usize {
+        2 * self.bands + (self.polygons * 2 + cell * 2 + side) * self.bands + band
+    }
+
+    /// Power intercepted by the contents in band `band` (W).
+    pub fn intercepted(&self, band: usize) -> f32 {
+        self.values[band]
+    }
+
+    /// Power scattered out of the box in band `band` (W).
+    pub fn scattered(&self, band: usize) -> f32 {
+        self.values[self.bands + band]
+    }
+
+    /// Power absorbed inside in band `band` (W): intercepted less scattered out.
+    pub fn absorbed(&self, band: usize) -> f32 {
+        self.intercepted(band) - self.scattered(band)
+    }
+
+    /// Adds a beam: `irradiance` (W/m^2 per band, on a plane facing the source) from the
+    /// world direction `towards` (towards the source). Non-finite or negative values and a
+    /// zero direction add nothing.
+    pub fn receive(&mut self, placed: &Placed<'_>, towards: Vec3, irradiance: &[f32]) {
+        let d = placed.local(towards);
+        if d == Vec3::ZERO {
+            return;
+        }
+        let t = &placed.tables;
+        let bands = self.bands.min(irradiance.len());
+        let scale = placed.area_scale;
+        let shadow = t.shadow(d);
+        let weights = t.phase().incoming().weights(d);
+        let single = t.single();
+        let wd = single.map(|s| s.grid().weights(d));
+        for (band, &e) in irradiance.iter().enumerate().take(bands) {
+            if !(e.is_finite() && e > 0.0) {
+                continue;
+            }
+            self.values[band] += e * scale * shadow;
+            let by_side = [t.scattered_by(d, 0, band), t.scattered_by(d, 1, band)];
+            let total = by_side[0] + by_side[1];
+            self.values[self.bands + band] += e * scale * total;
+            // The light scattered more than once, by the incoming cells where each side is
+            // lit (as `PhaseTable::response` weighs them).
+            for (side, &s) in by_side.iter().enumerate() {
+                if !side_lit(s, total) {
+                    continue;
+                }
+                let lit = |c: u32| t.phase().share_at(c, side, band) >= LIT_SHARE;
+                let sum: f32 = weights
+                    .iter()
+                    .filter(|&&(c, w)| w > 0.0 && lit(c))
+                    .map(|&(_, w)| w)
+                    .sum();
+                if sum <= 0.0 {
+                    continue;
+                }
+                for &(c, w) in &weights {
+                    if w > 0.0 && lit(c) {
+                        let at = self.cell_at(c as usize, side, band);
+                        self.values[at] += e * s * w / sum;
+                    }
+                }
+            }
+            // The first scattering, polygon by polygon.
+            if let (Some(single), Some(wd)) = (single, wd.as_ref()) {
+                for p in 0..self.polygons {
+                    let (n, _, _) = single.polygon(p, band);
+                    let cd = n.dot(d);
+                    if cd == 0.0 {
+                        continue;
+                    }
+                    let side = usize::from(cd < 0.0);
+                    let at = self.polygon_at(p, side, band);
+                    self.values[at] += e * cd.abs() * single.fraction(wd, p);
+                }
+            }
+        }
+    }
+
+    /// Intensity (W/sr) that leaves the instance towards the world direction `observer` in
+    /// band `band`, from all the light received.
+    pub fn intensity(&self, placed: &Placed<'_>, observer: Vec3, band: usize) -> f32 {
+        let o = placed.local(observer);
+        if o == Vec3::ZERO || band >= self.bands {
+            return 0.0;
+        }
+        let t = &placed.tables;
+        let phase = t.phase();
+        // The rest: what the incoming cells hold, through the response towards `o`.
+        let out = phase.outgoing().weights(o);
+        let mut rest = 0.0f32;
+        for c in 0..phase.incoming().cells() {
+            for side in 0..2 {
+                let w = self.values[self.cell_at(c as usize, side, band)];
+                if w == 0.0 {
+                    continue;
+                }
+                let r: f32 = out
+                    .iter()
+                    .map(|&(co, wo)| wo * phase.response_at(c, co, side, band))
+                    .sum();
+                rest += w * r;
+            }
+        }
+        let mut sum = rest * t.shadow(o);
+        // The first scattering: each polygon's lit sides as the observer sees them.
+        if let Some(single) = t.single() {
+            let wo = single.grid().weights(o);
+            for p in 0..self.polygons {
+                let (n, area, [rho_front, rho_back, tau]) = single.polygon(p, band);
+                let co = n.dot(o);
+                if co == 0.0 {
+                    continue;
+                }
+                let front = self.values[self.polygon_at(p, 0, band)];
+                let back = self.values[self.polygon_at(p, 1, band)];
+                let k = if co > 0.0 {
+                    rho_front * front + tau * back
+                } else {
+                    rho_back * back + tau * front
+                };
+                if k > 0.0 {
+                    sum += area * co.abs() * single.fraction(&wo, p) * k / core::f32::consts::PI;
+                }
+            }
+        }
+        placed.area_scale * sum
+    }
+}
