@@ -11,6 +11,7 @@ pub mod directional;
 pub mod grid;
 pub mod outgoing;
 pub mod phase;
+pub mod record;
 pub mod single;
 pub mod tau;
 

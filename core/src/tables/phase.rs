@@ -70,6 +70,8 @@ pub enum TableError {
     },
     /// The box is not finite or its corners are not ordered.
     Box,
+    /// A grid's side is 0 or above [`super::grid::MAX_SIDE`].
+    Grid,
 }
 
 /// Checks `values` against its expected length and its range `[0, max]`.

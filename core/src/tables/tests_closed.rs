@@ -315,3 +315,59 @@ fn storage_of_the_wrong_length_is_refused() {
     assert!((0..BANDS).all(|b| r.intercepted(b) == 0.0 && r.scattered(b) == 0.0));
     assert!(spread(20, 0.0).all(|o| r.intensity(&placed, o, 0) == 0.0));
 }
+
+/// Tables laid out as an image stores them come back as the same tables, and a record
+/// that does not match its storage is refused.
+#[test]
+fn tables_come_back_from_their_record() {
+    use crate::image::TableRecord;
+    let sides = (8u32, 4u32, 8u32, 4u32);
+    let polys = 3usize;
+    let s = storage(sides.0, sides.1, sides.2, sides.3, polys as u32);
+    let t = tables(&s, sides, polys);
+    let (lo, hi) = t.bounds();
+    let record = TableRecord {
+        original: 0,
+        bands: BANDS as u32,
+        tau_side: sides.0,
+        incoming_side: sides.1,
+        outgoing_side: sides.2,
+        lo: lo.to_array(),
+        hi: hi.to_array(),
+        scatterers: polys as u32,
+        single_side: sides.3,
+        ..TableRecord::default()
+    };
+    let mut values = Vec::new();
+    for part in [&s.tau, &s.albedo, &s.shares, &s.response, &s.shape] {
+        values.extend_from_slice(part);
+    }
+    let back = DirectionalTables::from_record(&record, &values, &s.visible).unwrap();
+    assert_eq!(back, t);
+    let short = &values[..values.len() - 1];
+    assert!(matches!(
+        DirectionalTables::from_record(&record, short, &s.visible),
+        Err(TableError::Length { .. })
+    ));
+    assert!(matches!(
+        DirectionalTables::from_record(&record, &values, &s.visible[1..]),
+        Err(TableError::Length { .. })
+    ));
+    let no_grid = TableRecord {
+        tau_side: 0,
+        ..record
+    };
+    // Lengths follow the sides, so a side of 0 is caught by its grid, not by a length.
+    let mut fewer = values.clone();
+    fewer.drain(..(sides.0 * sides.0) as usize * (1 + 2 * BANDS));
+    assert_eq!(
+        DirectionalTables::from_record(&no_grid, &fewer, &s.visible),
+        Err(TableError::Grid)
+    );
+    let mut bad = values.clone();
+    bad[3] = f32::NAN;
+    assert!(matches!(
+        DirectionalTables::from_record(&record, &bad, &s.visible),
+        Err(TableError::Value { index: 3 })
+    ));
+}
