@@ -1,10 +1,12 @@
 //! Counting what the expanded scene will need before anything is loaded: clusters (scene
 //! nodes, expanded instances and the grouping levels inserted under crowded clusters), input
-//! polygons by sidedness, the deepest nesting and the largest child list. Shared by planning
+//! polygons by sidedness, the deepest nesting and the largest child list, and the instances
+//! that stay closed with what their tables and received light take. Shared by planning
 //! and loading, so that the plan is exact. One pass over the image; originals are counted
 //! once and remembered in a small caller-provided scratch.
 
 use super::error::HrError;
+use super::settings::Instancing;
 use crate::image::{SceneSource, SceneView};
 use crate::limits::MAX_NODE_DEPTH;
 use crate::material::TWO_SIDED;
@@ -25,6 +27,19 @@ pub struct Census {
     pub depth: u32,
     /// Largest child list of any cluster before grouping.
     pub max_children: u32,
+    /// Instances that stay closed (see [`Instancing`]).
+    pub instances: u64,
+    /// Floats of the light they receive (see `tables::closed::Received`).
+    pub received_floats: u64,
+    /// Originals of the closed instances, each once: their tables' values (floats) and
+    /// visible fractions (bytes).
+    pub table_floats: u64,
+    /// See `table_floats`.
+    pub table_bytes: u64,
+    /// Originals with closed instances.
+    pub closed_originals: u32,
+    /// Zero.
+    pub reserved: u32,
 }
 
 impl Census {
@@ -48,6 +63,14 @@ impl Census {
             .ok_or(HrError::SceneTooLarge)?;
         self.depth = self.depth.max(o.depth);
         self.max_children = self.max_children.max(o.max_children);
+        self.instances = self
+            .instances
+            .checked_add(o.instances)
+            .ok_or(HrError::SceneTooLarge)?;
+        self.received_floats = self
+            .received_floats
+            .checked_add(o.received_floats)
+            .ok_or(HrError::SceneTooLarge)?;
         Ok(())
     }
 }
@@ -72,7 +95,9 @@ pub fn grouping_clusters(n: u64, m: u32) -> u64 {
 /// Bytes of scratch [`census`] needs.
 pub fn census_scratch_bytes<S: SceneSource>(view: &SceneView<S>) -> usize {
     let info = view.info();
-    info.originals as usize * core::mem::size_of::<Census>() + (info.materials as usize).div_ceil(8)
+    info.originals as usize * core::mem::size_of::<Census>()
+        + (info.materials as usize).div_ceil(8)
+        + (info.originals as usize).div_ceil(8)
 }
 
 /// An open node while walking a tree.
@@ -89,14 +114,27 @@ pub fn census<S: SceneSource>(
     max_children: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
+    census_level(view, max_children, Instancing::None, scratch)
+}
+
+/// Counts the scene as a solve with `instancing` loads it. `scratch` must hold
+/// [`census_scratch_bytes`].
+pub fn census_level<S: SceneSource>(
+    view: &SceneView<S>,
+    max_children: u32,
+    instancing: Instancing,
+    scratch: &mut [u8],
+) -> Result<Census, HrError> {
     let info = *view.info();
     let memo_bytes = info.originals as usize * core::mem::size_of::<Census>();
     if scratch.len() < census_scratch_bytes(view) {
         return Err(HrError::ScratchTooSmall);
     }
     let (memo_bytes, rest) = scratch.split_at_mut(memo_bytes);
-    let two_sided = &mut rest[..(info.materials as usize).div_ceil(8)];
+    let (two_sided, rest) = rest.split_at_mut((info.materials as usize).div_ceil(8));
+    let closed = &mut rest[..(info.originals as usize).div_ceil(8)];
     two_sided.fill(0);
+    closed.fill(0);
     for m in 0..info.materials {
         if view.material_record(MaterialId(m))?.flags & TWO_SIDED != 0 {
             two_sided[m as usize / 8] |= 1 << (m % 8);
@@ -109,11 +147,64 @@ pub fn census<S: SceneSource>(
     } else {
         bytemuck::try_cast_slice_mut(memo_bytes).map_err(|_| HrError::ScratchTooSmall)?
     };
-    for k in 0..info.originals {
-        let root = view.original(OriginalId(k))?.root;
-        memo[k as usize] = tree(view, root, max_children, two_sided, memo)?;
+    if instancing == Instancing::None {
+        for k in 0..info.originals {
+            let root = view.original(OriginalId(k))?.root;
+            memo[k as usize] = tree(view, root, max_children, two_sided, memo, None)?;
+        }
+        return tree(view, info.scene_root.0, max_children, two_sided, memo, None);
     }
-    tree(view, info.scene_root.0, max_children, two_sided, memo)
+    let mut c = tree(
+        view,
+        info.scene_root.0,
+        max_children,
+        two_sided,
+        memo,
+        Some(closed),
+    )?;
+    // The tables of every original with closed instances, each once.
+    for k in 0..info.originals {
+        if closed[k as usize / 8] & (1 << (k % 8)) == 0 {
+            continue;
+        }
+        let t = view
+            .table_of(OriginalId(k))?
+            .ok_or(HrError::NoTables { original: k })?;
+        c.closed_originals += 1;
+        c.table_floats = c
+            .table_floats
+            .checked_add(t.values())
+            .ok_or(HrError::SceneTooLarge)?;
+        c.table_bytes = c
+            .table_bytes
+            .checked_add(t.visible_bytes())
+            .ok_or(HrError::SceneTooLarge)?;
+    }
+    Ok(c)
+}
+
+/// A closed instance of `original`: one instance, the floats of the light it receives,
+/// and its original marked in `closed`.
+fn closed_instance<S: SceneSource>(
+    view: &SceneView<S>,
+    original: u32,
+    closed: &mut [u8],
+) -> Result<Census, HrError> {
+    let t = view
+        .table_of(OriginalId(original))?
+        .ok_or(HrError::NoTables { original })?;
+    if let Some(b) = closed.get_mut(original as usize / 8) {
+        *b |= 1 << (original % 8);
+    }
+    Ok(Census {
+        instances: 1,
+        received_floats: crate::tables::closed::received_floats(
+            t.bands as usize,
+            t.scatterers as usize,
+            t.incoming_side as usize * t.incoming_side as usize,
+        ) as u64,
+        ..Census::default()
+    })
 }
 
 fn tree<S: SceneSource>(
@@ -122,6 +213,7 @@ fn tree<S: SceneSource>(
     max_children: u32,
     two_sided: &[u8],
     memo: &[Census],
+    mut closed: Option<&mut [u8]>,
 ) -> Result<Census, HrError> {
     let mut stack: heapless::Vec<Frame, MAX_NODE_DEPTH> = heapless::Vec::new();
     let end = view.node(NodeId(root))?.subtree_end;
@@ -129,6 +221,57 @@ fn tree<S: SceneSource>(
     let mut i = root;
     while i < end {
         let rec = view.node(NodeId(i))?;
+        // An instance below the root that stays closed: a leaf of its parent, its subtree
+        // (an approximate instance's own geometry) skipped.
+        if let (Some(id), Some(closed), Some(parent)) =
+            (rec.instance(), closed.as_deref_mut(), stack.last_mut())
+        {
+            let inst = view.instance(id)?;
+            let leaf = closed_instance(view, inst.original, closed)?;
+            parent.children += 1;
+            parent.acc.add(&leaf)?;
+            i = rec.subtree_end.max(i + 1) - 1;
+        } else {
+            open(view, &rec, two_sided, memo, &mut stack, &mut result)?;
+        }
+        // Close every subtree that ends after this node.
+        while stack.last().is_some_and(|f| f.end == i + 1) {
+            let Some(mut f) = stack.pop() else { break };
+            f.acc.clusters = f
+                .acc
+                .clusters
+                .checked_add(grouping_clusters(f.children, max_children))
+                .ok_or(HrError::SceneTooLarge)?;
+            f.acc.max_children = f
+                .acc
+                .max_children
+                .max(f.children.min(u32::MAX as u64) as u32);
+            f.acc.depth += 1;
+            match stack.last_mut() {
+                Some(parent) => {
+                    parent.children += 1;
+                    parent.acc.add(&f.acc)?;
+                }
+                None => result = f.acc,
+            }
+        }
+        i += 1;
+    }
+    Ok(result)
+}
+
+/// Counts node `rec` of an expanded tree: an exact instance as its original's census (from
+/// `memo`), any other node as a cluster with its own polygons, pushed to be closed with its
+/// subtree.
+fn open<S: SceneSource>(
+    view: &SceneView<S>,
+    rec: &crate::image::NodeRecord,
+    two_sided: &[u8],
+    memo: &[Census],
+    stack: &mut heapless::Vec<Frame, MAX_NODE_DEPTH>,
+    result: &mut Census,
+) -> Result<(), HrError> {
+    {
         let exact = match rec.instance() {
             Some(id) => {
                 let inst = view.instance(id)?;
@@ -148,7 +291,7 @@ fn tree<S: SceneSource>(
                         ..sub
                     })?;
                 }
-                None => result = sub,
+                None => *result = sub,
             }
         } else {
             let mut own = Census {
@@ -180,30 +323,8 @@ fn tree<S: SceneSource>(
             };
             stack.push(frame).map_err(|_| HrError::SceneTooLarge)?;
         }
-        // Close every subtree that ends after this node.
-        while stack.last().is_some_and(|f| f.end == i + 1) {
-            let Some(mut f) = stack.pop() else { break };
-            f.acc.clusters = f
-                .acc
-                .clusters
-                .checked_add(grouping_clusters(f.children, max_children))
-                .ok_or(HrError::SceneTooLarge)?;
-            f.acc.max_children = f
-                .acc
-                .max_children
-                .max(f.children.min(u32::MAX as u64) as u32);
-            f.acc.depth += 1;
-            match stack.last_mut() {
-                Some(parent) => {
-                    parent.children += 1;
-                    parent.acc.add(&f.acc)?;
-                }
-                None => result = f.acc,
-            }
-        }
-        i += 1;
     }
-    Ok(result)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -39,6 +39,11 @@ pub enum HrError {
         /// The band.
         band: u32,
     },
+    /// An instance stays closed but its original has no directional tables in the image.
+    NoTables {
+        /// The original (index).
+        original: u32,
+    },
 }
 
 impl From<ImageError> for HrError {
@@ -51,6 +56,10 @@ impl core::fmt::Display for HrError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             HrError::Image(e) => write!(f, "{e}"),
+            HrError::NoTables { original } => write!(
+                f,
+                "original {original} has closed instances but no directional tables in the image (compute them with `hirad tables SCENE -o OUT.hirb`)"
+            ),
             HrError::WorkspaceTooSmall { needed } => {
                 write!(
                     f,

@@ -43,6 +43,7 @@ pub(crate) struct Strides {
     pub patch1: usize,
     pub patch2: usize,
     pub source: usize,
+    pub instance: usize,
     pub link: usize,
     /// Coefficients per link: 1 without two-sided materials, 4 with.
     pub link_k: usize,
@@ -65,6 +66,7 @@ impl Strides {
             patch1: core::mem::size_of::<Patch>() + per_side,
             patch2: core::mem::size_of::<Patch>() + 2 * per_side,
             source: core::mem::size_of::<Source>() + 4 * bands,
+            instance: core::mem::size_of::<InstanceLeaf>(),
             link: core::mem::size_of::<Link>() + 4 * link_k + 4 * bands,
             link_k,
             bins: 4 * super::bins::bin_floats(bands),
@@ -119,9 +121,43 @@ pub(crate) struct Layout {
     pub static_bytes: usize,
     /// Bytes of the static regions alone (without block tables and scratch).
     pub fixed_bytes: usize,
+    /// Closed instances (records), their cluster order, the light they receive, the table
+    /// slots of their originals, each original's slot (NONE without closed instances), and
+    /// the tables' values and visible fractions.
+    pub instances: usize,
+    pub instance_order: usize,
+    pub received: usize,
+    pub slots: usize,
+    pub slot_map: usize,
+    pub table_values: usize,
+    pub table_visible: usize,
+    pub table_bytes_end: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
+    pub n_instances: u32,
+}
+
+impl Layout {
+    /// Table slots the layout holds.
+    pub(crate) fn n_slots(&self) -> u32 {
+        ((self.slot_map - self.slots) / core::mem::size_of::<TableSlot>()) as u32
+    }
+
+    /// Floats of table values the layout holds.
+    pub(crate) fn n_table_floats(&self) -> usize {
+        (self.table_visible - self.table_values) / 4
+    }
+
+    /// Bytes of visible fractions the layout holds.
+    pub(crate) fn n_table_bytes(&self) -> usize {
+        self.table_bytes_end - self.table_visible
+    }
+
+    /// Floats of received light the layout holds.
+    pub(crate) fn n_received_floats(&self) -> usize {
+        (self.slots - self.received) / 4
+    }
 }
 
 /// Block size for a workspace of `bytes`: about 1/256 of the dynamic space, within
@@ -138,9 +174,11 @@ fn block_size(dynamic: usize) -> usize {
 impl Layout {
     /// Lays out a workspace of `total` bytes for a scene; `None` if the static part alone
     /// does not fit (or counts overflow).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         census: &Census,
         materials: u32,
+        originals: u32,
         sources: u32,
         bands: usize,
         settings: &Settings,
@@ -155,6 +193,11 @@ impl Layout {
         let n_polygons = u32::try_from(census.polygons())
             .ok()
             .filter(|&p| p <= super::ids::Elem::MAX_INDEX)?;
+        let n_instances = u32::try_from(census.instances)
+            .ok()
+            .filter(|&p| p <= super::ids::Elem::MAX_INDEX)?;
+        let received_floats = u32::try_from(census.received_floats).ok()?;
+        let closing = census.instances > 0;
         let mut at = 0usize;
         let mut region = |bytes: usize| -> Option<usize> {
             let start = at;
@@ -165,7 +208,18 @@ impl Layout {
         let polygons_at = region((n_polygons as usize).checked_mul(strides.polygon)?)?;
         let order_at = region(n_polygons as usize * 4)?;
         let clusters_at = region((n_clusters as usize).checked_mul(strides.cluster)?)?;
-        let children_at = region((n_clusters as usize + n_polygons as usize) * 4)?;
+        let children_at =
+            region((n_clusters as usize + n_polygons as usize + n_instances as usize) * 4)?;
+        let instances_at = region((n_instances as usize).checked_mul(strides.instance)?)?;
+        let instance_order_at = region(n_instances as usize * 4)?;
+        let received_at = region((received_floats as usize).checked_mul(4)?)?;
+        let slots_at = region(
+            (census.closed_originals as usize).checked_mul(core::mem::size_of::<TableSlot>())?,
+        )?;
+        let slot_map_at = region(if closing { originals as usize * 4 } else { 0 })?;
+        let table_values_at = region(usize::try_from(census.table_floats).ok()?.checked_mul(4)?)?;
+        let table_visible_at = region(usize::try_from(census.table_bytes).ok()?)?;
+        let table_bytes_end = region(0)?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -224,8 +278,17 @@ impl Layout {
             block_count: count,
             static_bytes: blocks_base + up(scratch_floats * 4) + bvh_bytes,
             fixed_bytes: before_tables,
+            instances: instances_at,
+            instance_order: instance_order_at,
+            received: received_at,
+            slots: slots_at,
+            slot_map: slot_map_at,
+            table_values: table_values_at,
+            table_visible: table_visible_at,
+            table_bytes_end,
             n_clusters,
             n_polygons,
+            n_instances,
         })
     }
 }

@@ -10,7 +10,7 @@ use super::ids::{Elem, Kind};
 use super::layout::{FRAME_BYTES, GROUP_ITEM_BYTES, Layout};
 use super::pool::{Blocks, Pool, read, write};
 use super::records::*;
-use super::settings::{Settings, Stats};
+use super::settings::{Instancing, Settings, Stats};
 use super::state::State;
 use crate::geometry::{Aabb, Similarity, polygon_shape};
 use crate::image::{SceneSource, SceneView};
@@ -51,6 +51,7 @@ const _: () = assert!(core::mem::size_of::<Item>() == GROUP_ITEM_BYTES);
 pub(crate) fn load<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
+    instancing: Instancing,
     census: &Census,
     lay: Layout,
     ws: &mut [u8],
@@ -94,6 +95,12 @@ pub(crate) fn load<S: SceneSource>(
         correction_split: 0,
         closed: false,
         sees_backs: false,
+        instancing,
+        instances: 0,
+        slots: 0,
+        table_floats: 0,
+        table_bytes: 0,
+        received_floats: 0,
         scene_min: Vec3::ZERO,
         scene_max: Vec3::ZERO,
         stats: Stats {
@@ -148,6 +155,11 @@ pub(crate) fn load<S: SceneSource>(
         );
         s.b_mut(ws, e, 0).copy_from_slice(&l.irradiance[..bands]);
     }
+    if lay.n_instances > 0 {
+        for k in 0..info.originals as usize {
+            write(ws, lay.slot_map + 4 * k, &NONE);
+        }
+    }
     load_tree(view, &mut s, ws)?;
     finish_clusters(&mut s, ws);
     cluster_order(&mut s, ws);
@@ -201,6 +213,8 @@ fn new_cluster(s: &mut State, ws: &mut [u8], parent: u32) -> Result<u32, HrError
         bins: NONE,
         peak: 0.0,
         emitted: 0.0,
+        instances: 0,
+        first_instance: 0,
     };
     s.set_cluster(ws, i, &c);
     let e = Elem::new(Kind::Cluster, i);
@@ -232,6 +246,11 @@ fn load_tree<S: SceneSource>(
         let child = f.next;
         let rec = view.node(NodeId(child))?;
         f.next = rec.subtree_end;
+        if closes(s, &rec) {
+            // A closed instance: its leaf was made with its parent's children.
+            write(ws, at, &f);
+            continue;
+        }
         let cluster = f.next_cluster;
         f.next_cluster += 1;
         write(ws, at, &f);
@@ -248,6 +267,130 @@ fn load_tree<S: SceneSource>(
         open_node(view, s, ws, node, cluster, t, depth)?;
     }
     Ok(())
+}
+
+/// True when node `rec`, a child of a loaded node, is an instance that stays closed.
+fn closes(s: &State, rec: &crate::image::NodeRecord) -> bool {
+    s.instancing == Instancing::Top && rec.instance().is_some()
+}
+
+/// Makes the leaf of closed instance node `node` under transform `t` (its parent's), its
+/// original's tables read into the workspace and checked the first time they are needed.
+fn add_instance<S: SceneSource>(
+    view: &SceneView<S>,
+    s: &mut State,
+    ws: &mut [u8],
+    node: u32,
+    t: &Similarity,
+) -> Result<Elem, HrError> {
+    let lay = s.lay;
+    let rec = view.node(NodeId(node))?;
+    let id = rec.instance().ok_or(HrError::SceneTooLarge)?;
+    let inst = view.instance(id)?;
+    let original = inst.original();
+    let place = t.compose(&inst.transform());
+    let slot = table_slot(view, s, ws, original.0)?;
+    let record = s.slot(ws, slot).record;
+    let i = s.instances;
+    if i >= lay.n_instances {
+        return Err(HrError::SceneTooLarge);
+    }
+    s.instances += 1;
+    let received = received_floats(&record);
+    if s.received_floats + received > lay.n_received_floats() {
+        return Err(HrError::SceneTooLarge);
+    }
+    let bbox = place.aabb(&Aabb::new(record.lo.into(), record.hi.into()));
+    if !bbox.is_finite_nonempty() && bbox.min != bbox.max {
+        return Err(HrError::BadGeometry {
+            polygon: s.polygons as u64,
+        });
+    }
+    let leaf = InstanceLeaf {
+        rotation: place.rotation.to_array(),
+        translation: place.translation.to_array(),
+        scale: place.scale,
+        bbox_min: bbox.min.to_array(),
+        bbox_max: bbox.max.to_array(),
+        parent: NONE,
+        links: NONE,
+        slot,
+        received: s.received_floats as u32,
+        node,
+        reserved: 0,
+    };
+    let at = lay.received + 4 * s.received_floats;
+    ws[at..at + 4 * received].fill(0);
+    s.received_floats += received;
+    s.set_instance(ws, i, &leaf);
+    Ok(Elem::new(Kind::Instance, i))
+}
+
+/// Floats of the light an instance of the original of `record` receives.
+fn received_floats(record: &crate::image::TableRecord) -> usize {
+    crate::tables::closed::received_floats(
+        record.bands as usize,
+        record.scatterers as usize,
+        record.incoming_side as usize * record.incoming_side as usize,
+    )
+}
+
+/// The table slot of `original`: read from the image into the workspace and checked the
+/// first time.
+fn table_slot<S: SceneSource>(
+    view: &SceneView<S>,
+    s: &mut State,
+    ws: &mut [u8],
+    original: u32,
+) -> Result<u32, HrError> {
+    let lay = s.lay;
+    let map_at = lay.slot_map + 4 * original as usize;
+    let known: u32 = read(ws, map_at);
+    if known != NONE {
+        return Ok(known);
+    }
+    let record = view
+        .table_of(crate::OriginalId(original))?
+        .ok_or(HrError::NoTables { original })?;
+    let (floats, bytes) = (record.values() as usize, record.visible_bytes() as usize);
+    let values_at = lay.table_values + 4 * s.table_floats;
+    let visible_at = lay.table_visible + s.table_bytes;
+    if s.slots >= lay.n_slots()
+        || s.table_floats + floats > lay.n_table_floats()
+        || s.table_bytes + bytes > lay.n_table_bytes()
+    {
+        return Err(HrError::SceneTooLarge);
+    }
+    {
+        let values: &mut [f32] =
+            bytemuck::cast_slice_mut(&mut ws[values_at..values_at + 4 * floats]);
+        view.table_values(record.first, values)?;
+    }
+    view.table_visibility(
+        record.first_visible,
+        &mut ws[visible_at..visible_at + bytes],
+    )?;
+    {
+        let values: &[f32] = bytemuck::cast_slice(&ws[values_at..values_at + 4 * floats]);
+        let visible = &ws[visible_at..visible_at + bytes];
+        crate::tables::directional::DirectionalTables::from_record(&record, values, visible)
+            .map_err(|_| HrError::NoTables { original })?;
+    }
+    let slot = s.slots;
+    s.slots += 1;
+    s.table_floats += floats;
+    s.table_bytes += bytes;
+    write(
+        ws,
+        lay.slots + slot as usize * core::mem::size_of::<TableSlot>(),
+        &TableSlot {
+            record,
+            values: values_at as u64,
+            visible: visible_at as u64,
+        },
+    );
+    write(ws, map_at, &slot);
+    Ok(slot)
 }
 
 /// The tree node whose content stands for `node`, and the transform to world: an exact
@@ -316,13 +459,22 @@ fn open_node<S: SceneSource>(
     let mut j = node + 1;
     while j < rec.subtree_end {
         let c = view.node(NodeId(j))?;
-        let b = t.aabb(&Aabb::new(c.bbox_min.into(), c.bbox_max.into()));
+        // A closed instance is a leaf at once; other nodes get clusters below.
+        let (elem, centre) = if closes(s, &c) {
+            let e = add_instance(view, s, ws, j, &t)?;
+            let leaf = s.instance(ws, e.index());
+            let b = Aabb::new(leaf.bbox_min.into(), leaf.bbox_max.into());
+            (e.0, b.center())
+        } else {
+            let b = t.aabb(&Aabb::new(c.bbox_min.into(), c.bbox_max.into()));
+            (0, b.center())
+        };
         write(
             ws,
             item_at(n_items + child_nodes),
             &Item {
-                elem: 0,
-                centroid: b.center().to_array(),
+                elem,
+                centroid: centre.to_array(),
             },
         );
         child_nodes += 1;
@@ -337,9 +489,12 @@ fn open_node<S: SceneSource>(
     }
     let first_child_cluster = s.clusters;
     for k in 0..child_nodes {
-        let c = new_cluster(s, ws, cluster)?;
         let at = item_at(n_items + k);
         let mut it: Item = read(ws, at);
+        if Elem(it.elem).kind() == Kind::Instance {
+            continue;
+        }
+        let c = new_cluster(s, ws, cluster)?;
         it.elem = Elem::new(Kind::Cluster, c).0;
         write(ws, at, &it);
     }
@@ -495,7 +650,7 @@ fn group(
         // Write the owner's child list and re-parent its children.
         let n = if direct { count } else { entries.len() as u32 };
         let base = s.child_entries;
-        if base + n > s.lay.n_clusters + s.lay.n_polygons {
+        if base + n > s.lay.n_clusters + s.lay.n_polygons + s.lay.n_instances {
             return Err(HrError::SceneTooLarge);
         }
         s.child_entries += n;
@@ -522,6 +677,10 @@ fn set_parent(s: &State, ws: &mut [u8], e: Elem, parent: u32) {
         let mut c = s.cluster(ws, e.index());
         c.parent = parent;
         s.set_cluster(ws, e.index(), &c);
+    } else if e.kind() == Kind::Instance {
+        let mut c = s.instance(ws, e.index());
+        c.parent = parent;
+        s.set_instance(ws, e.index(), &c);
     } else {
         let mut p = s.patch(ws, e);
         p.parent = Elem::new(Kind::Cluster, parent).0;
@@ -535,17 +694,24 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
         let mut c = s.cluster(ws, i);
         let mut b = Aabb::EMPTY;
         let (mut area, mut polys, mut emitted) = (0.0f32, 0u32, 0.0f32);
+        let mut instances = 0u32;
         for k in 0..c.child_count {
             let e = s.child(ws, c.children + k);
             match e.kind() {
                 Kind::Cluster => {
                     let cc = s.cluster(ws, e.index());
-                    if cc.polygons > 0 {
+                    if cc.polygons > 0 || cc.instances > 0 {
                         b = b.union(Aabb::new(cc.bbox_min.into(), cc.bbox_max.into()));
                     }
                     area += cc.area;
                     polys += cc.polygons;
                     emitted += cc.emitted;
+                    instances += cc.instances;
+                }
+                Kind::Instance => {
+                    let leaf = s.instance(ws, e.index());
+                    b = b.union(Aabb::new(leaf.bbox_min.into(), leaf.bbox_max.into()));
+                    instances += 1;
                 }
                 _ => {
                     let p = s.patch(ws, e);
@@ -566,6 +732,7 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
         c.area = area;
         c.polygons = polys;
         c.emitted = emitted;
+        c.instances = instances;
         s.set_cluster(ws, i, &c);
     }
 }
@@ -589,13 +756,23 @@ fn cluster_order(s: &mut State, ws: &mut [u8]) {
     for i in 0..s.clusters {
         let c = s.cluster(ws, i);
         let mut at = c.first_polygon;
+        let mut at_instance = c.first_instance;
         for k in 0..c.child_count {
             let e = s.child(ws, c.children + k);
             if e.kind() == Kind::Cluster {
                 let mut cc = s.cluster(ws, e.index());
                 cc.first_polygon = at;
                 at += cc.polygons;
+                cc.first_instance = at_instance;
+                at_instance += cc.instances;
                 s.set_cluster(ws, e.index(), &cc);
+            } else if e.kind() == Kind::Instance {
+                write(
+                    ws,
+                    s.lay.instance_order + 4 * at_instance as usize,
+                    &e.index(),
+                );
+                at_instance += 1;
             } else {
                 let poly = s.patch(ws, e).poly;
                 s.set_ordered(ws, at, poly);

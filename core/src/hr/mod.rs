@@ -51,11 +51,11 @@ mod state;
 mod vis;
 
 pub use balance::Balance;
-pub use census::{Census, census, census_scratch_bytes, grouping_clusters};
+pub use census::{Census, census, census_level, census_scratch_bytes, grouping_clusters};
 pub use error::{HrError, SolveError};
 pub use exec::{Executor, NoProgress, Progress, Sequential};
 pub use plan::{Plan, plan};
-pub use settings::{MAX_FINAL_PASSES, RaysByPhase, Settings, Stats};
+pub use settings::{Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats};
 
 use crate::image::{SceneSource, SceneView};
 use crate::sink::Sink;
@@ -92,6 +92,11 @@ where
 /// that can be copied with its workspace and run again. Not a stable interface.
 #[doc(hidden)]
 pub mod bench;
+
+/// Hooks for the tests of a level with closed instances (issue 18, under construction).
+/// Not a stable interface.
+#[doc(hidden)]
+pub mod level_probe;
 
 /// A diagnostic of the transport link by link, for `examples/audit.rs` (through `bench`).
 #[doc(hidden)]

@@ -59,6 +59,7 @@ pub(super) fn plan_from<S: SceneSource>(
     let lay0 = Layout::new(
         c,
         info.materials,
+        info.originals,
         sources(view),
         bands,
         settings,
@@ -71,6 +72,7 @@ pub(super) fn plan_from<S: SceneSource>(
         let Some(lay) = Layout::new(
             c,
             info.materials,
+            info.originals,
             sources(view),
             bands,
             settings,
@@ -133,6 +135,7 @@ pub(super) fn plan_from<S: SceneSource>(
     let at_min = Layout::new(
         c,
         info.materials,
+        info.originals,
         sources(view),
         bands,
         settings,

@@ -106,6 +106,49 @@ pub(crate) struct Cluster {
     /// The power its polygons emit (W, both sides, the largest band): how the final gather
     /// picks emitting polygons in scenes with many (see `final_gather::emitter_tree`).
     pub emitted: f32,
+    /// Closed instances inside.
+    pub instances: u32,
+    /// First of its closed instances in the instance-order array (consecutive there).
+    pub first_instance: u32,
+}
+
+/// A closed instance: a leaf that stands for its contents through its original's
+/// directional tables (see `tables::closed`).
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct InstanceLeaf {
+    /// The instance's transform to world: rotation (unit quaternion x y z w).
+    pub rotation: [f32; 4],
+    /// Translation (m).
+    pub translation: [f32; 3],
+    /// Uniform scale.
+    pub scale: f32,
+    /// A world box that holds the placed box of its original (m).
+    pub bbox_min: [f32; 3],
+    /// Upper corner.
+    pub bbox_max: [f32; 3],
+    /// Parent cluster.
+    pub parent: u32,
+    /// Head of the list of links this element receives.
+    pub links: u32,
+    /// Its original's table slot (see [`TableSlot`]).
+    pub slot: u32,
+    /// First float of the light it received in the received region.
+    pub received: u32,
+    /// Its node in the image (to open it).
+    pub node: u32,
+    /// Zero.
+    pub reserved: u32,
+}
+
+/// The tables of one original with closed instances, read into the workspace: its record
+/// and where its values (f32) and visible fractions (bytes) lie (byte offsets).
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct TableSlot {
+    pub record: crate::image::TableRecord,
+    pub values: u64,
+    pub visible: u64,
 }
 
 /// A directional source: a sun or one sky direction.

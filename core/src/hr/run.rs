@@ -6,7 +6,7 @@ use super::error::{HrError, SolveError};
 use super::exec::{self, Executor, Progress};
 use super::layout::Layout;
 use super::plan::{aligned, plan_from, sources};
-use super::settings::{Settings, Stats};
+use super::settings::{Instancing, Settings, Stats};
 use super::{
     balance, bins, closure, direct, gather_rays, load, output, pending, refine, relight, solve,
     state, vis,
@@ -80,6 +80,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         let lay = Layout::new(
             &c,
             info.materials,
+            info.originals,
             sources(view),
             info.bands as usize,
             settings,
@@ -90,12 +91,13 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             needed: plan.min_bytes,
         })?;
         let (ws, bvh_bytes, scratch) = parts(&lay, ws, plan.min_bytes)?;
-        let mut st = load::load(view, settings, &c, lay, ws).map_err(|e| match e {
-            HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
-                needed: plan.min_bytes,
-            },
-            e => e,
-        })?;
+        let mut st =
+            load::load(view, settings, Instancing::None, &c, lay, ws).map_err(|e| match e {
+                HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
+                    needed: plan.min_bytes,
+                },
+                e => e,
+            })?;
         let vis = match visibility {
             Some(v) => vis::Vis::External(v),
             None => {

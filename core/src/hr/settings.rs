@@ -3,6 +3,18 @@
 use super::balance::Balance;
 use super::error::HrError;
 
+/// Which instances a solve expands into their contents and which stay closed, standing for
+/// their contents through their originals' directional tables (paper section 3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Instancing {
+    /// Every instance expanded: hierarchical radiosity over the whole scene.
+    #[default]
+    None,
+    /// Every instance below the scene's root stays closed: the paper's first level. (Loaded
+    /// and counted so far; the level solve with closed instances is being built, issue 18.)
+    Top,
+}
+
 /// What the caller chooses: speed against accuracy.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {

@@ -5,7 +5,7 @@ use super::ids::{Elem, Kind};
 use super::layout::Layout;
 use super::pool::{Blocks, Pool, floats, floats_mut, read, write};
 use super::records::*;
-use super::settings::{Settings, Stats};
+use super::settings::{Instancing, Settings, Stats};
 use crate::limits::NONE;
 use glam::Vec3;
 
@@ -66,6 +66,14 @@ pub(crate) struct State {
     /// usize` before the gather takes them; and how many one-sided patches there were then.
     pub correction: usize,
     pub correction_split: u32,
+    /// Which instances stay closed, and how many closed instances, table slots, table
+    /// values (floats), visible fractions (bytes) and received floats are loaded so far.
+    pub instancing: Instancing,
+    pub instances: u32,
+    pub slots: u32,
+    pub table_floats: usize,
+    pub table_bytes: usize,
+    pub received_floats: usize,
     /// The scene's box (m).
     pub scene_min: Vec3,
     pub scene_max: Vec3,
@@ -127,6 +135,7 @@ impl State {
         match e.kind() {
             Kind::Cluster => self.lay.clusters + e.index() as usize * s.cluster,
             Kind::Source => self.lay.sources + e.index() as usize * s.source,
+            Kind::Instance => self.lay.instances + e.index() as usize * s.instance,
             k => self.pool(k).at(ws, &self.blocks, e.index()),
         }
     }
@@ -187,6 +196,7 @@ impl State {
             + match e.kind() {
                 Kind::Cluster => core::mem::size_of::<Cluster>(),
                 Kind::Source => core::mem::size_of::<Source>(),
+                Kind::Instance => core::mem::size_of::<InstanceLeaf>(),
                 _ => core::mem::size_of::<Patch>(),
             }
     }
@@ -381,6 +391,52 @@ impl State {
         )
     }
 
+    pub(crate) fn instance(&self, ws: &[u8], i: u32) -> InstanceLeaf {
+        read(
+            ws,
+            self.lay.instances + i as usize * self.lay.strides.instance,
+        )
+    }
+
+    pub(crate) fn set_instance(&self, ws: &mut [u8], i: u32, c: &InstanceLeaf) {
+        write(
+            ws,
+            self.lay.instances + i as usize * self.lay.strides.instance,
+            c,
+        )
+    }
+
+    /// The table slot `k` (see [`TableSlot`]).
+    pub(crate) fn slot(&self, ws: &[u8], k: u32) -> TableSlot {
+        read(
+            ws,
+            self.lay.slots + k as usize * core::mem::size_of::<TableSlot>(),
+        )
+    }
+
+    /// Closed instance `i`'s original's tables, placed by its transform.
+    pub(crate) fn placed<'a>(&self, ws: &'a [u8], i: u32) -> crate::tables::closed::Placed<'a> {
+        let leaf = self.instance(ws, i);
+        let slot = self.slot(ws, leaf.slot);
+        let r = &slot.record;
+        let values = floats(ws, slot.values as usize, r.values() as usize);
+        let visible = &ws[slot.visible as usize..(slot.visible + r.visible_bytes()) as usize];
+        let tables = crate::tables::directional::DirectionalTables::trusted(r, values, visible);
+        let place = crate::geometry::Similarity {
+            rotation: glam::Quat::from_array(leaf.rotation),
+            translation: leaf.translation.into(),
+            scale: leaf.scale,
+        };
+        crate::tables::closed::Placed::new(tables, place)
+    }
+
+    /// The floats of the light closed instance `i` received.
+    pub(crate) fn received<'a>(&self, ws: &'a [u8], i: u32) -> &'a [f32] {
+        let leaf = self.instance(ws, i);
+        let n = self.placed(ws, i).received_len();
+        floats(ws, self.lay.received + 4 * leaf.received as usize, n)
+    }
+
     pub(crate) fn polygon(&self, ws: &[u8], i: u32) -> Polygon {
         read(ws, self.polygon_at(i))
     }
@@ -400,6 +456,7 @@ impl State {
     pub(crate) fn links_head(&self, ws: &[u8], e: Elem) -> u32 {
         match e.kind() {
             Kind::Cluster => self.cluster(ws, e.index()).links,
+            Kind::Instance => self.instance(ws, e.index()).links,
             Kind::Source => NONE,
             _ => self.patch(ws, e).links,
         }
@@ -413,6 +470,11 @@ impl State {
                 self.set_cluster(ws, e.index(), &c);
             }
             Kind::Source => {}
+            Kind::Instance => {
+                let mut c = self.instance(ws, e.index());
+                c.links = head;
+                self.set_instance(ws, e.index(), &c);
+            }
             _ => {
                 let mut p = self.patch(ws, e);
                 p.links = head;

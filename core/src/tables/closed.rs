@@ -21,6 +21,14 @@ use super::phase::{LIT_SHARE, TableError, side_lit};
 use crate::geometry::{Aabb, Similarity};
 use glam::Vec3;
 
+/// Floats of the light a closed instance receives (see [`Received`]) for tables of `bands`
+/// bands, `scatterers` polygons kept apart and `incoming_cells` cells of the phase table's
+/// incoming grid: per band the power intercepted and scattered, per polygon, cell, side and
+/// band one value.
+pub const fn received_floats(bands: usize, scatterers: usize, incoming_cells: usize) -> usize {
+    2 * bands + 2 * bands * (scatterers + incoming_cells)
+}
+
 /// An original's tables placed in the world by an instance's transform.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placed<'a> {
@@ -126,10 +134,11 @@ impl<'a> Placed<'a> {
 
     /// Floats of storage the light received by this instance needs (see [`Received`]).
     pub fn received_len(&self) -> usize {
-        let bands = self.tables.phase().bands();
-        let polygons = self.tables.single().map_or(0, |s| s.polygons());
-        let cells = self.tables.phase().incoming().cells() as usize;
-        2 * bands + 2 * bands * (polygons + cells)
+        received_floats(
+            self.tables.phase().bands(),
+            self.tables.single().map_or(0, |s| s.polygons()),
+            self.tables.phase().incoming().cells() as usize,
+        )
     }
 }
 

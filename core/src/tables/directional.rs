@@ -37,8 +37,6 @@ pub struct DirectionalTables<'a> {
     phase: PhaseTable<'a>,
     /// The polygons' first scattering, kept per polygon (see [`super::single`]).
     single: Option<SingleScatter<'a>>,
-    /// The cross-section integrated over the sphere (m^2 sr): the uniform form's spread.
-    shadow_integral: f32,
 }
 
 impl<'a> DirectionalTables<'a> {
@@ -60,13 +58,6 @@ impl<'a> DirectionalTables<'a> {
             tau_grid.cells() as u64 * 2 * phase.bands() as u64,
             1.0 + 1e-3,
         )?;
-        let shadow_integral = (0..tau_grid.cells())
-            .map(|c| {
-                let d = tau_grid.direction(c);
-                (1.0 - tau[c as usize]) * projected_area(lo, hi, d)
-            })
-            .sum::<f32>()
-            * tau_grid.solid_angle();
         Ok(Self {
             lo,
             hi,
@@ -75,8 +66,51 @@ impl<'a> DirectionalTables<'a> {
             albedo,
             phase,
             single: None,
-            shadow_integral,
         })
+    }
+
+    /// The tables of `record` over storage that [`Self::from_record`] accepted before
+    /// (nothing is checked again: a solve checks its tables once, when it loads them).
+    /// Storage too short for the record gives empty tables rather than a panic.
+    pub(crate) fn trusted(
+        record: &crate::image::TableRecord,
+        values: &'a [f32],
+        visible: &'a [u8],
+    ) -> Self {
+        let mut rest = values;
+        let mut take = |n: u64| {
+            let n = (n as usize).min(rest.len());
+            let (head, tail) = rest.split_at(n);
+            rest = tail;
+            head
+        };
+        let [tau, albedo, shares, response, shape] = record.lengths().map(&mut take);
+        let grid = |side: u32| DirectionGrid::new(side).unwrap_or(DirectionGrid::ONE);
+        let bands = (record.bands as usize).clamp(1, crate::limits::MAX_BANDS);
+        let single = (record.scatterers > 0).then(|| {
+            SingleScatter::trusted(
+                grid(record.single_side),
+                bands,
+                record.scatterers as usize,
+                shape,
+                visible,
+            )
+        });
+        Self {
+            lo: Vec3::from(record.lo),
+            hi: Vec3::from(record.hi),
+            tau_grid: grid(record.tau_side),
+            tau,
+            albedo,
+            phase: PhaseTable::trusted(
+                grid(record.incoming_side),
+                grid(record.outgoing_side),
+                bands,
+                shares,
+                response,
+            ),
+            single,
+        }
     }
 
     /// The same tables with the polygons' first scattering kept apart: the phase table then
@@ -200,9 +234,22 @@ impl<'a> DirectionalTables<'a> {
     /// The same by the uniform form: the scattered power leaves as if from a surface of
     /// uniform radiance whose area seen from `observer` is the cross-section there.
     pub fn uniform_intensity(&self, source: Vec3, observer: Vec3, band: usize) -> f32 {
-        if self.shadow_integral <= 0.0 {
+        let integral = self.shadow_integral();
+        if integral <= 0.0 {
             return 0.0;
         }
-        self.scattered(source, band) * self.shadow(observer) / self.shadow_integral
+        self.scattered(source, band) * self.shadow(observer) / integral
+    }
+
+    /// The cross-section integrated over the sphere (m^2 sr): the uniform form's spread.
+    pub fn shadow_integral(&self) -> f32 {
+        let g = self.tau_grid;
+        (0..g.cells())
+            .map(|c| {
+                let t = self.tau.get(c as usize).copied().unwrap_or(1.0);
+                (1.0 - t) * projected_area(self.lo, self.hi, g.direction(c))
+            })
+            .sum::<f32>()
+            * g.solid_angle()
     }
 }

@@ -30,6 +30,9 @@ pub enum GridError {
 }
 
 impl DirectionGrid {
+    /// The grid of one cell: the whole sphere.
+    pub const ONE: DirectionGrid = DirectionGrid { side: 1 };
+
     /// A grid of `side x side` cells, `side` in `1..=MAX_SIDE`.
     pub fn new(side: u32) -> Result<Self, GridError> {
         if side == 0 || side > MAX_SIDE {

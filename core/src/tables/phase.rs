@@ -115,6 +115,23 @@ impl<'a> PhaseTable<'a> {
         })
     }
 
+    /// A table over storage checked before (see `DirectionalTables::trusted`).
+    pub(crate) fn trusted(
+        incoming: DirectionGrid,
+        outgoing: DirectionGrid,
+        bands: usize,
+        shares: &'a [f32],
+        response: &'a [f32],
+    ) -> Self {
+        Self {
+            incoming,
+            outgoing,
+            bands,
+            shares,
+            response,
+        }
+    }
+
     /// The grid of incoming directions.
     pub fn incoming(&self) -> DirectionGrid {
         self.incoming

@@ -114,6 +114,23 @@ impl<'a> SingleScatter<'a> {
         })
     }
 
+    /// Fractions over storage checked before (see `DirectionalTables::trusted`).
+    pub(crate) fn trusted(
+        grid: DirectionGrid,
+        bands: usize,
+        polygons: usize,
+        shape: &'a [f32],
+        visible: &'a [u8],
+    ) -> Self {
+        Self {
+            grid,
+            bands,
+            polygons,
+            shape,
+            visible,
+        }
+    }
+
     /// The grid of the visible fractions.
     pub fn grid(&self) -> DirectionGrid {
         self.grid

@@ -137,7 +137,8 @@ fn classify(e: HrError) -> anyhow::Error {
         | HrError::NoLight
         | HrError::Empty
         | HrError::BadGeometry { .. }
-        | HrError::NoSteadyState { .. } => crate::exit::input(error),
+        | HrError::NoSteadyState { .. }
+        | HrError::NoTables { .. } => crate::exit::input(error),
         HrError::WorkspaceTooSmall { .. } | HrError::Settings(_) => crate::exit::usage(error),
         HrError::Diverged { .. } => crate::exit::not_right(error),
         HrError::ScratchTooSmall => error,

@@ -1,0 +1,140 @@
+//! Hooks for the tests of a level with closed instances while the level solve is built
+//! (issue 18): load a level and look at what it holds. Not a stable interface.
+
+use super::census::{Census, census_level, census_scratch_bytes};
+use super::error::HrError;
+use super::layout::Layout;
+use super::plan::{aligned, sources};
+use super::pool::read;
+use super::settings::{Instancing, Settings};
+use crate::geometry::{Aabb, Similarity};
+use crate::image::{SceneSource, SceneView};
+use crate::tables::closed::Placed;
+use glam::{Quat, Vec3};
+
+/// A closed instance of a loaded level.
+#[derive(Clone, Copy, Debug)]
+pub struct ClosedInstance<'a> {
+    /// Its node in the image.
+    pub node: u32,
+    /// Its transform to world.
+    pub place: Similarity,
+    /// The world box the level keeps for it (m).
+    pub bounds: Aabb,
+    /// Its original's tables as the level reads them from its workspace, placed.
+    pub placed: Placed<'a>,
+    /// Floats of received light kept for it (all zero after loading).
+    pub received: &'a [f32],
+}
+
+/// What a loaded level holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LevelCounts {
+    /// The level's census.
+    pub census: Census,
+    /// Clusters, polygons and closed instances loaded.
+    pub clusters: u32,
+    pub polygons: u32,
+    pub instances: u32,
+    /// Table slots (originals with closed instances) loaded.
+    pub slots: u32,
+    /// True when every cluster's range of the instance order holds exactly the closed
+    /// instances below it.
+    pub order_consistent: bool,
+}
+
+/// Counts, lays out and loads the scene's top level under `instancing` into `workspace`
+/// (its suggested size from the level's census is up to the caller: give plenty), and hands
+/// every closed instance to `each` in load order.
+pub fn load_level<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    instancing: Instancing,
+    workspace: &mut [u8],
+    mut each: impl FnMut(ClosedInstance<'_>),
+) -> Result<LevelCounts, HrError> {
+    settings.check()?;
+    let ws = aligned(workspace);
+    let need = census_scratch_bytes(view);
+    if ws.len() < need {
+        return Err(HrError::WorkspaceTooSmall {
+            needed: need as u64,
+        });
+    }
+    let c = census_level(view, settings.max_children, instancing, &mut ws[..need])?;
+    let info = view.info();
+    let lay = Layout::new(
+        &c,
+        info.materials,
+        info.originals,
+        sources(view),
+        info.bands as usize,
+        settings,
+        false,
+        ws.len(),
+    )
+    .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
+    let ws = &mut ws[..lay.main_bytes];
+    let st = super::load::load(view, settings, instancing, &c, lay, ws)?;
+    let ws: &[u8] = ws;
+    for i in 0..st.instances {
+        let leaf = st.instance(ws, i);
+        each(ClosedInstance {
+            node: leaf.node,
+            place: Similarity {
+                rotation: Quat::from_array(leaf.rotation),
+                translation: leaf.translation.into(),
+                scale: leaf.scale,
+            },
+            bounds: Aabb::new(Vec3::from(leaf.bbox_min), Vec3::from(leaf.bbox_max)),
+            placed: st.placed(ws, i),
+            received: st.received(ws, i),
+        });
+    }
+    Ok(LevelCounts {
+        census: c,
+        clusters: st.clusters,
+        polygons: st.polygons,
+        instances: st.instances,
+        slots: st.slots,
+        order_consistent: order_consistent(&st, ws),
+    })
+}
+
+/// Every cluster's instance range holds exactly the instances whose parent chain reaches
+/// it, and the root's holds them all.
+fn order_consistent(st: &super::state::State, ws: &[u8]) -> bool {
+    if st.clusters == 0 {
+        return st.instances == 0;
+    }
+    let root = st.cluster(ws, 0);
+    if root.first_instance != 0 || root.instances != st.instances {
+        return false;
+    }
+    for i in 0..st.clusters {
+        let c = st.cluster(ws, i);
+        for k in c.first_instance..c.first_instance + c.instances {
+            let leaf: u32 = read(ws, st.lay.instance_order + 4 * k as usize);
+            if leaf >= st.instances {
+                return false;
+            }
+            // Walk up from the leaf's parent to the root: cluster i must be on the way.
+            let mut cur = st.instance(ws, leaf).parent;
+            let mut found = false;
+            for _ in 0..=st.clusters {
+                if cur == i {
+                    found = true;
+                    break;
+                }
+                if cur == crate::limits::NONE {
+                    break;
+                }
+                cur = st.cluster(ws, cur).parent;
+            }
+            if !found {
+                return false;
+            }
+        }
+    }
+    true
+}

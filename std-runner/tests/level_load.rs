@@ -1,0 +1,274 @@
+//! A level with closed instances, loaded (issue 18, the level solve under construction):
+//! every instance below the root becomes one leaf with its own transform and box, its
+//! original's tables are read into the workspace once and come back equal to the image's,
+//! the counts match the level's census, and each cluster's instances are consecutive.
+
+use glam::{Quat, Vec3};
+use hirad::generate::palette::{diffuse, two_sided};
+use hirad::generate::shapes::add_quad;
+use hirad::scene::{Cluster, InstanceOf, Original, Scene, Similarity, Tables, compile};
+use hirad_core::hr::level_probe::load_level;
+use hirad_core::hr::{HrError, Instancing, Settings, census, census_scratch_bytes};
+use hirad_core::image::{LightData, SceneView, SliceSource, TABLE_MET, TableRecord};
+use hirad_core::tables::directional::DirectionalTables;
+
+/// Tables for an original of box `lo..hi`, with values that differ by original (`salt`)
+/// and `scatterers` polygons kept apart on a grid of side 2.
+fn tables(original: usize, lo: Vec3, hi: Vec3, salt: f32, scatterers: u32) -> Tables {
+    let record = TableRecord {
+        bands: 2,
+        tau_side: 4,
+        incoming_side: 2,
+        outgoing_side: 3,
+        flags: TABLE_MET,
+        lo: lo.to_array(),
+        hi: hi.to_array(),
+        scatterers,
+        single_side: if scatterers > 0 { 2 } else { 0 },
+        ..TableRecord::default()
+    };
+    let [tau, albedo, shares, response, _] = record.lengths();
+    let mut values = Vec::new();
+    values.extend((0..tau).map(|i| (0.05 * i as f32 + salt).fract()));
+    values.extend((0..albedo).map(|i| 0.1 + 0.3 * ((0.37 * i as f32 + salt).fract())));
+    values.extend((0..shares).map(|i| 0.2 + 0.5 * ((0.13 * i as f32).fract())));
+    values.extend((0..response).map(|i| 0.01 * (1 + i % 17) as f32 + salt));
+    for p in 0..scatterers {
+        values.extend([0.0, 0.6, 0.8, 0.01 * (1 + p) as f32]);
+        for _ in 0..2 {
+            values.extend([0.1, 0.2, 0.3]);
+        }
+    }
+    let visible = (0..record.visible_bytes())
+        .map(|i| (i * 53) as u8)
+        .collect();
+    Tables {
+        original,
+        record,
+        values,
+        visible,
+    }
+}
+
+fn instance(original: usize, transform: Similarity) -> Cluster {
+    Cluster {
+        instance: Some(InstanceOf {
+            original,
+            exact: true,
+            transform,
+        }),
+        ..Cluster::default()
+    }
+}
+
+fn place(axis: Vec3, angle: f32, at: Vec3, scale: f32) -> Similarity {
+    Similarity {
+        rotation: Quat::from_axis_angle(axis.normalize(), angle),
+        translation: at,
+        scale,
+    }
+}
+
+/// Ground, a row of `n` instances of a leaf under one cluster, a shrub (an original that
+/// holds leaves) placed twice at the root, and an approximate instance of the leaf with
+/// geometry of its own: what the top level closes.
+fn scene(n: usize) -> (Scene, Vec<Similarity>) {
+    let mut s = Scene::new(2);
+    let soil = diffuse(&mut s, "soil", &[0.1, 0.2]);
+    let leaf_m = two_sided(&mut s, "leaf", &[0.1, 0.4], &[0.1, 0.35], &[0.05, 0.4]);
+    let mut leaf = Cluster::named("leaf");
+    add_quad(
+        &mut leaf,
+        [
+            Vec3::new(-0.1, -0.1, 0.0),
+            Vec3::new(0.1, -0.1, 0.0),
+            Vec3::new(0.1, 0.1, 0.02),
+            Vec3::new(-0.1, 0.1, 0.02),
+        ],
+        leaf_m,
+    );
+    let mut shrub = Cluster::named("shrub");
+    for k in 0..3 {
+        shrub.children.push(instance(
+            0,
+            place(Vec3::Z, k as f32, Vec3::new(0.0, 0.0, 0.2 * k as f32), 1.0),
+        ));
+    }
+    s.originals = vec![
+        Original {
+            name: "leaf".into(),
+            root: leaf.clone(),
+        },
+        Original {
+            name: "shrub".into(),
+            root: shrub,
+        },
+    ];
+    add_quad(
+        &mut s.root,
+        [
+            Vec3::new(-5.0, -5.0, 0.0),
+            Vec3::new(5.0, -5.0, 0.0),
+            Vec3::new(5.0, 5.0, 0.0),
+            Vec3::new(-5.0, 5.0, 0.0),
+        ],
+        soil,
+    );
+    let mut row = Cluster::named("row");
+    let mut places = Vec::new();
+    for k in 0..n {
+        let p = place(
+            Vec3::new(0.2, 1.0, 0.5 + k as f32),
+            0.3 * k as f32,
+            Vec3::new(-4.0 + 0.8 * k as f32, 1.0, 0.3),
+            0.5 + 0.1 * (k % 5) as f32,
+        );
+        places.push(p);
+        row.children.push(instance(0, p));
+    }
+    s.root.children.push(row);
+    for k in 0..2 {
+        let p = place(
+            Vec3::X,
+            0.5 * k as f32,
+            Vec3::new(2.0, -2.0 + 3.0 * k as f32, 0.0),
+            2.0,
+        );
+        places.push(p);
+        s.root.children.push(instance(1, p));
+    }
+    let p = place(Vec3::Y, 1.0, Vec3::new(0.0, 3.0, 1.0), 1.5);
+    places.push(p);
+    s.root.children.push(Cluster {
+        instance: Some(InstanceOf {
+            original: 0,
+            exact: false,
+            transform: p,
+        }),
+        ..leaf
+    });
+    s.suns.push(LightData {
+        towards: Vec3::new(0.3, 0.2, 0.9).normalize(),
+        irradiance: [500.0, 400.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    });
+    s.tables = vec![
+        tables(
+            0,
+            Vec3::new(-0.1, -0.1, 0.0),
+            Vec3::new(0.1, 0.1, 0.02),
+            0.1,
+            1,
+        ),
+        tables(
+            1,
+            Vec3::new(-0.2, -0.2, 0.0),
+            Vec3::new(0.2, 0.2, 0.42),
+            0.5,
+            0,
+        ),
+    ];
+    (s, places)
+}
+
+fn corners(lo: Vec3, hi: Vec3) -> impl Iterator<Item = Vec3> {
+    (0..8).map(move |k| {
+        Vec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
+#[test]
+fn the_top_level_closes_every_instance_with_its_tables() {
+    for n in [0usize, 1, 5, 40] {
+        let (s, places) = scene(n);
+        let bytes = compile(&s).unwrap();
+        let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+        let settings = Settings::default();
+        let mut ws = vec![0u8; 64 << 20];
+        let image_tables: Vec<_> = s
+            .tables
+            .iter()
+            .map(|t| DirectionalTables::from_record(&t.record, &t.values, &t.visible).unwrap())
+            .collect();
+        let mut seen = Vec::new();
+        let counts = load_level(&view, &settings, Instancing::Top, &mut ws, |c| {
+            // Every leaf's box holds its original's placed box.
+            let (lo, hi) = c.placed.tables().bounds();
+            for p in corners(lo, hi) {
+                let w = c.place.point(p);
+                let pad = 1e-4 * (1.0 + w.length());
+                assert!(
+                    (c.bounds.min - Vec3::splat(pad)).cmple(w).all()
+                        && w.cmple(c.bounds.max + Vec3::splat(pad)).all(),
+                    "corner {w} outside {:?}",
+                    c.bounds
+                );
+            }
+            assert!(c.received.iter().all(|&v| v == 0.0));
+            let which = image_tables.iter().position(|t| t == c.placed.tables());
+            seen.push((c.node, c.place, which));
+        })
+        .unwrap();
+        // The ground's one polygon; the row's instances, the shrubs and the approximate
+        // leaf closed; clusters: root, row (and grouping under crowded ones).
+        assert_eq!(counts.polygons, 1);
+        assert_eq!(counts.instances as usize, n + 3);
+        assert_eq!(counts.census.instances as usize, n + 3);
+        assert_eq!(counts.clusters as u64, counts.census.clusters);
+        assert_eq!(counts.slots, 2);
+        assert_eq!(counts.census.closed_originals, 2);
+        assert!(counts.order_consistent);
+        // By node, the scene's depth-first order: the row's, the shrubs, the leaf (a
+        // node's own instances load with it, before its child clusters').
+        assert_eq!(seen.len(), places.len());
+        seen.sort_by_key(|x| x.0);
+        for (k, ((_, got_place, which), want_place)) in seen.iter().zip(&places).enumerate() {
+            let d = got_place.point(Vec3::new(0.3, -0.2, 0.7))
+                - want_place.point(Vec3::new(0.3, -0.2, 0.7));
+            assert!(d.length() < 1e-5, "instance {k}: placed elsewhere");
+            let original = if k >= n && k < n + 2 { 1 } else { 0 };
+            assert_eq!(*which, Some(original), "instance {k}");
+        }
+        // Without instancing, nothing is closed and the census is the expanded one.
+        let mut scratch = vec![0u8; census_scratch_bytes(&view)];
+        let expanded = census(&view, settings.max_children, &mut scratch).unwrap();
+        let none = load_level(&view, &settings, Instancing::None, &mut ws, |_| {
+            panic!("nothing is closed")
+        })
+        .unwrap();
+        assert_eq!(none.instances, 0);
+        assert_eq!(none.census, expanded);
+        assert_eq!(none.polygons as u64, 1 + n as u64 + 6 + 1);
+    }
+}
+
+#[test]
+fn a_closed_instance_without_tables_is_refused() {
+    let (mut s, _) = scene(3);
+    s.tables.remove(1);
+    let bytes = compile(&s).unwrap();
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    let mut ws = vec![0u8; 16 << 20];
+    let err = load_level(
+        &view,
+        &Settings::default(),
+        Instancing::Top,
+        &mut ws,
+        |_| {},
+    )
+    .unwrap_err();
+    assert!(matches!(err, HrError::NoTables { .. }), "{err:?}");
+    assert!(err.to_string().contains("hirad tables"));
+    // Expanded, it needs none.
+    load_level(
+        &view,
+        &Settings::default(),
+        Instancing::None,
+        &mut ws,
+        |_| {},
+    )
+    .unwrap();
+}
