@@ -194,22 +194,25 @@ fn the_top_level_closes_every_instance_with_its_tables() {
             .map(|t| DirectionalTables::from_record(&t.record, &t.values, &t.visible).unwrap())
             .collect();
         let mut seen = Vec::new();
-        let counts = load_level(&view, &settings, Instancing::Top, &mut ws, |c| {
-            // Every leaf's box holds its original's placed box.
-            let (lo, hi) = c.placed.tables().bounds();
-            for p in corners(lo, hi) {
-                let w = c.place.point(p);
-                let pad = 1e-4 * (1.0 + w.length());
-                assert!(
-                    (c.bounds.min - Vec3::splat(pad)).cmple(w).all()
-                        && w.cmple(c.bounds.max + Vec3::splat(pad)).all(),
-                    "corner {w} outside {:?}",
-                    c.bounds
-                );
+        let counts = load_level(&view, &settings, Instancing::Top, &mut ws, |level| {
+            for i in 0..level.instances() {
+                let c = level.instance(i);
+                // Every leaf's box holds its original's placed box.
+                let (lo, hi) = c.placed.tables().bounds();
+                for p in corners(lo, hi) {
+                    let w = c.place.point(p);
+                    let pad = 1e-4 * (1.0 + w.length());
+                    assert!(
+                        (c.bounds.min - Vec3::splat(pad)).cmple(w).all()
+                            && w.cmple(c.bounds.max + Vec3::splat(pad)).all(),
+                        "corner {w} outside {:?}",
+                        c.bounds
+                    );
+                }
+                assert!(c.received.iter().all(|&v| v == 0.0));
+                let which = image_tables.iter().position(|t| t == c.placed.tables());
+                seen.push((c.node, c.place, which));
             }
-            assert!(c.received.iter().all(|&v| v == 0.0));
-            let which = image_tables.iter().position(|t| t == c.placed.tables());
-            seen.push((c.node, c.place, which));
         })
         .unwrap();
         // The ground's one polygon; the row's instances, the shrubs and the approximate
@@ -235,8 +238,8 @@ fn the_top_level_closes_every_instance_with_its_tables() {
         // Without instancing, nothing is closed and the census is the expanded one.
         let mut scratch = vec![0u8; census_scratch_bytes(&view)];
         let expanded = census(&view, settings.max_children, &mut scratch).unwrap();
-        let none = load_level(&view, &settings, Instancing::None, &mut ws, |_| {
-            panic!("nothing is closed")
+        let none = load_level(&view, &settings, Instancing::None, &mut ws, |level| {
+            assert_eq!(level.instances(), 0)
         })
         .unwrap();
         assert_eq!(none.instances, 0);
@@ -269,6 +272,90 @@ fn a_closed_instance_without_tables_is_refused() {
         Instancing::None,
         &mut ws,
         |_| {},
+    )
+    .unwrap();
+}
+
+/// A point of `place`'s original box `lo..hi`, or not (the inverse transform, in f64).
+fn inside(place: &Similarity, lo: Vec3, hi: Vec3, w: Vec3) -> bool {
+    let local = place.rotation.conjugate() * (w - place.translation) / place.scale;
+    (0..3).all(|k| local[k] >= lo[k] && local[k] <= hi[k])
+}
+
+#[test]
+fn closed_instances_block_by_tau_along_what_they_cross() {
+    let (s, places) = scene(12);
+    let bytes = compile(&s).unwrap();
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    let image_tables: Vec<_> = s
+        .tables
+        .iter()
+        .map(|t| DirectionalTables::from_record(&t.record, &t.values, &t.visible).unwrap())
+        .collect();
+    let mut ws = vec![0u8; 64 << 20];
+    load_level(
+        &view,
+        &Settings::default(),
+        Instancing::Top,
+        &mut ws,
+        |level| {
+            // Instances by node: the scene's order, as `places`.
+            let mut by_node: Vec<u32> = (0..level.instances()).collect();
+            by_node.sort_by_key(|&i| level.instance(i).node);
+            let original = |k: usize| if (12..14).contains(&k) { 1 } else { 0 };
+            // The reference: points along the segment tell which boxes it enters.
+            let reference = |a: Vec3, b: Vec3, skip: Option<usize>| -> (f32, usize) {
+                let d = (b - a).normalize();
+                let (mut t, mut crossed) = (1.0f32, 0);
+                for (k, p) in places.iter().enumerate() {
+                    if Some(k) == skip {
+                        continue;
+                    }
+                    let tables = &image_tables[original(k)];
+                    let (lo, hi) = tables.bounds();
+                    let steps = 20_000;
+                    if (0..=steps)
+                        .any(|j| inside(p, lo, hi, a + (b - a) * (j as f32 / steps as f32)))
+                    {
+                        t *= tables.tau(p.rotation.conjugate() * d);
+                        crossed += 1;
+                    }
+                }
+                (t, crossed)
+            };
+            let mut crossings = 0;
+            for k in 0..200u32 {
+                let h = |j: u32| ((k * 7919 + j * 104_729) % 1000) as f32 / 1000.0;
+                let a = Vec3::new(-6.0 + 12.0 * h(1), -6.0 + 12.0 * h(2), 0.1 + 1.5 * h(3));
+                let b = Vec3::new(-6.0 + 12.0 * h(4), -6.0 + 12.0 * h(5), 0.1 + 1.5 * h(6));
+                let (want, crossed) = reference(a, b, None);
+                crossings += crossed;
+                let got = level.transmittance(a, b, None);
+                assert!(
+                    (got - want).abs() < 1e-5,
+                    "segment {k}: {got} vs {want} ({crossed} boxes)"
+                );
+            }
+            assert!(crossings > 20, "the segments must cross boxes: {crossings}");
+            // From inside an instance with it skipped: the others only.
+            for (k, p) in places.iter().enumerate() {
+                let (lo, hi) = image_tables[original(k)].bounds();
+                let a = p.point((lo + hi) * 0.5);
+                let b = a + Vec3::new(3.0, -1.0, 0.5);
+                let (want, _) = reference(a, b, Some(k));
+                let got = level.transmittance(a, b, Some(by_node[k]));
+                assert!(
+                    (got - want).abs() < 1e-5,
+                    "from inside {k}: {got} vs {want}"
+                );
+                let (with_self, _) = reference(a, b, None);
+                let got = level.transmittance(a, b, None);
+                assert!(
+                    (got - with_self).abs() < 1e-5,
+                    "from inside {k}, not skipped"
+                );
+            }
+        },
     )
     .unwrap();
 }

@@ -132,6 +132,8 @@ pub(crate) struct Layout {
     pub table_values: usize,
     pub table_visible: usize,
     pub table_bytes_end: usize,
+    /// The BVH over the closed instances' boxes (see `blockers`).
+    pub closed_bvh: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
@@ -220,6 +222,7 @@ impl Layout {
         let table_values_at = region(usize::try_from(census.table_floats).ok()?.checked_mul(4)?)?;
         let table_visible_at = region(usize::try_from(census.table_bytes).ok()?)?;
         let table_bytes_end = region(0)?;
+        let closed_bvh_at = region(super::blockers::bytes_needed(n_instances))?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -286,6 +289,7 @@ impl Layout {
             table_values: table_values_at,
             table_visible: table_visible_at,
             table_bytes_end,
+            closed_bvh: closed_bvh_at,
             n_clusters,
             n_polygons,
             n_instances,

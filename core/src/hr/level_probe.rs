@@ -43,15 +43,51 @@ pub struct LevelCounts {
     pub order_consistent: bool,
 }
 
+/// A loaded level, to look at.
+pub struct Level<'a> {
+    st: &'a super::state::State,
+    ws: &'a [u8],
+}
+
+impl Level<'_> {
+    /// Closed instances loaded.
+    pub fn instances(&self) -> u32 {
+        self.st.instances
+    }
+
+    /// Closed instance `i` (in load order).
+    pub fn instance(&self, i: u32) -> ClosedInstance<'_> {
+        let leaf = self.st.instance(self.ws, i);
+        ClosedInstance {
+            node: leaf.node,
+            place: Similarity {
+                rotation: Quat::from_array(leaf.rotation),
+                translation: leaf.translation.into(),
+                scale: leaf.scale,
+            },
+            bounds: Aabb::new(Vec3::from(leaf.bbox_min), Vec3::from(leaf.bbox_max)),
+            placed: self.st.placed(self.ws, i),
+            received: self.st.received(self.ws, i),
+        }
+    }
+
+    /// What the closed instances let through along the segment `from..to` (polygons do not
+    /// block here), but instance `skip`.
+    pub fn transmittance(&self, from: Vec3, to: Vec3, skip: Option<u32>) -> f32 {
+        let s = skip.map_or(crate::limits::NONE, |i| super::blockers::SKIP_INSTANCE | i);
+        super::blockers::transmittance(self.st, self.ws, from, to, [s, crate::limits::NONE])
+    }
+}
+
 /// Counts, lays out and loads the scene's top level under `instancing` into `workspace`
-/// (its suggested size from the level's census is up to the caller: give plenty), and hands
-/// every closed instance to `each` in load order.
+/// (its suggested size from the level's census is up to the caller: give plenty), and lets
+/// `inspect` look at it.
 pub fn load_level<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     instancing: Instancing,
     workspace: &mut [u8],
-    mut each: impl FnMut(ClosedInstance<'_>),
+    inspect: impl FnOnce(&Level<'_>),
 ) -> Result<LevelCounts, HrError> {
     settings.check()?;
     let ws = aligned(workspace);
@@ -77,20 +113,7 @@ pub fn load_level<S: SceneSource>(
     let ws = &mut ws[..lay.main_bytes];
     let st = super::load::load(view, settings, instancing, &c, lay, ws)?;
     let ws: &[u8] = ws;
-    for i in 0..st.instances {
-        let leaf = st.instance(ws, i);
-        each(ClosedInstance {
-            node: leaf.node,
-            place: Similarity {
-                rotation: Quat::from_array(leaf.rotation),
-                translation: leaf.translation.into(),
-                scale: leaf.scale,
-            },
-            bounds: Aabb::new(Vec3::from(leaf.bbox_min), Vec3::from(leaf.bbox_max)),
-            placed: st.placed(ws, i),
-            received: st.received(ws, i),
-        });
-    }
+    inspect(&Level { st: &st, ws });
     Ok(LevelCounts {
         census: c,
         clusters: st.clusters,

@@ -163,6 +163,7 @@ pub(crate) fn load<S: SceneSource>(
     load_tree(view, &mut s, ws)?;
     finish_clusters(&mut s, ws);
     cluster_order(&mut s, ws);
+    super::blockers::build(&s, ws)?;
     totals(&mut s, ws, info.suns + info.sky);
     if s.power.is_nan() || s.power <= 0.0 {
         return Err(HrError::NoLight);

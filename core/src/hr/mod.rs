@@ -18,6 +18,7 @@
 
 mod balance;
 mod bins;
+mod blockers;
 mod census;
 mod closure;
 mod cluster_kernel;

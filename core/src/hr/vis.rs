@@ -46,19 +46,33 @@ pub(crate) struct Ray<'a, V: ?Sized> {
     pub polys: WsPolygons<'a>,
 }
 
+impl<V: Visibility + ?Sized> Ray<'_, V> {
+    /// What the closed instances the segment crosses let through (1 without any).
+    fn closed(&self, t: f32, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
+        if t <= 0.0 || self.polys.st.instances == 0 {
+            return t;
+        }
+        t * super::blockers::transmittance(self.polys.st, self.polys.ws, from, to, skip)
+    }
+}
+
 impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
     fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
-        match self.vis {
+        let t = match self.vis {
             Vis::External(v) => v.transmittance(from, to, skip),
             Vis::Internal(bvh) => {
                 BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip)
             }
-        }
+        };
+        self.closed(t, from, to, skip)
     }
 
     fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
         match self.vis {
-            Vis::External(v) => v.transmittance_towards(from, to, towards, skip),
+            Vis::External(v) => {
+                let t = v.transmittance_towards(from, to, towards, skip);
+                self.closed(t, from, to, skip)
+            }
             Vis::Internal(_) => self.transmittance(from, to, skip),
         }
     }

@@ -1,0 +1,95 @@
+//! Closed instances as blockers (DESIGN.md "Instances inside a level"): a ray that crosses a
+//! closed instance's box goes on with the weight `tau` of its direction, the uncollided
+//! transmittance of the contents. A small BVH over the instances' world boxes, built in the
+//! workspace when the level is loaded, finds the boxes a segment may cross; each candidate
+//! is tested against its placed (oriented) box.
+
+use super::error::HrError;
+use super::state::State;
+use crate::bvh::{Bvh, BvhNode};
+use glam::Vec3;
+
+/// A `skip` entry that names closed instance `i` is `SKIP_INSTANCE | i`: the segment starts
+/// or ends inside it, and its own contents are not in the way (polygon ids never have this
+/// bit).
+pub(crate) const SKIP_INSTANCE: u32 = 1 << 31;
+
+/// Bytes of the BVH over `instances` boxes: nodes, then the order.
+pub(crate) fn bytes_needed(instances: u32) -> usize {
+    if instances == 0 {
+        return 0;
+    }
+    crate::bvh::nodes_needed(instances) * core::mem::size_of::<BvhNode>() + 4 * instances as usize
+}
+
+fn split(st: &State, instances: u32) -> (usize, usize, usize) {
+    let nodes = crate::bvh::nodes_needed(instances) * core::mem::size_of::<BvhNode>();
+    let at = st.lay.closed_bvh;
+    (at, at + nodes, at + nodes + 4 * instances as usize)
+}
+
+/// Builds the BVH over the loaded instances' boxes.
+pub(crate) fn build(st: &State, ws: &mut [u8]) -> Result<(), HrError> {
+    let n = st.instances;
+    if n == 0 {
+        return Ok(());
+    }
+    let (a, b, c) = split(st, n);
+    // The boxes first (the workspace cannot be read while the BVH's arrays are borrowed).
+    let (head, tail) = ws.split_at_mut(a);
+    let (nodes, rest) = tail.split_at_mut(b - a);
+    let order = &mut rest[..c - b];
+    let nodes: &mut [BvhNode] =
+        bytemuck::try_cast_slice_mut(nodes).map_err(|_| HrError::SceneTooLarge)?;
+    let order: &mut [u32] =
+        bytemuck::try_cast_slice_mut(order).map_err(|_| HrError::SceneTooLarge)?;
+    let head: &[u8] = head;
+    crate::bvh::build(
+        n,
+        |i| {
+            let leaf = st.instance(head, i);
+            crate::geometry::Aabb::new(leaf.bbox_min.into(), leaf.bbox_max.into())
+        },
+        nodes,
+        order,
+    )
+    .map_err(|_| HrError::SceneTooLarge)?;
+    Ok(())
+}
+
+/// The BVH over the level's closed instances (empty without).
+fn bvh<'a>(st: &State, ws: &'a [u8]) -> Bvh<'a> {
+    let n = st.instances;
+    if n == 0 {
+        return Bvh::EMPTY;
+    }
+    let (a, b, c) = split(st, n);
+    match (
+        bytemuck::try_cast_slice::<u8, BvhNode>(&ws[a..b]),
+        bytemuck::try_cast_slice::<u8, u32>(&ws[b..c]),
+    ) {
+        (Ok(nodes), Ok(order)) => Bvh::new_unchecked(nodes, order),
+        _ => Bvh::EMPTY,
+    }
+}
+
+/// The product of `tau` along the segment `from..to` over the closed instances whose boxes
+/// it crosses, but those `skip` names (see [`SKIP_INSTANCE`]).
+pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
+    if st.instances == 0 {
+        return 1.0;
+    }
+    let d = (to - from).normalize_or_zero();
+    let mut t = 1.0f32;
+    bvh(st, ws).any_hit(from, to, |i| {
+        if skip.contains(&(SKIP_INSTANCE | i)) {
+            return false;
+        }
+        let placed = st.placed(ws, i);
+        if placed.crosses(from, to) {
+            t *= placed.tau(d);
+        }
+        t <= 0.0
+    });
+    t.max(0.0)
+}
