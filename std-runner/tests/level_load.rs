@@ -209,7 +209,7 @@ fn the_top_level_closes_every_instance_with_its_tables() {
                         c.bounds
                     );
                 }
-                assert!(c.received.iter().all(|&v| v == 0.0));
+                assert!(c.received.iter().all(|&v| v.is_finite()));
                 let which = image_tables.iter().position(|t| t == c.placed.tables());
                 seen.push((c.node, c.place, which));
             }
@@ -358,4 +358,91 @@ fn closed_instances_block_by_tau_along_what_they_cross() {
         },
     )
     .unwrap();
+}
+
+/// True when the segment `a..b` meets `place`'s box `lo..hi` (slabs in the local frame).
+fn meets(place: &Similarity, lo: Vec3, hi: Vec3, a: Vec3, b: Vec3) -> bool {
+    let to_local = |w: Vec3| place.rotation.conjugate() * (w - place.translation) / place.scale;
+    let (p, q) = (to_local(a), to_local(b));
+    let (mut enter, mut leave) = (0.0f32, 1.0f32);
+    for k in 0..3 {
+        let d = q[k] - p[k];
+        if d.abs() < 1e-12 {
+            if p[k] < lo[k] || p[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (t0, t1) = ((lo[k] - p[k]) / d, (hi[k] - p[k]) / d);
+        enter = enter.max(t0.min(t1));
+        leave = leave.min(t0.max(t1));
+    }
+    enter <= leave
+}
+
+#[test]
+fn closed_instances_see_the_sun_through_the_others() {
+    use hirad_core::tables::closed::Received;
+    let (mut s, places) = scene(12);
+    // A sun low enough for the shrubs to shade part of the row.
+    let sun = Vec3::new(-0.5, 0.9, 0.6).normalize();
+    s.suns[0].towards = sun;
+    let bytes = compile(&s).unwrap();
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    let image_tables: Vec<_> = s
+        .tables
+        .iter()
+        .map(|t| DirectionalTables::from_record(&t.record, &t.values, &t.visible).unwrap())
+        .collect();
+    let original = |k: usize| if (12..14).contains(&k) { 1 } else { 0 };
+    let settings = Settings {
+        rays: 64,
+        ..Settings::default()
+    };
+    let mut ws = vec![0u8; 64 << 20];
+    let mut shaded = 0;
+    load_level(&view, &settings, Instancing::Top, &mut ws, |level| {
+        let mut by_node: Vec<u32> = (0..level.instances()).collect();
+        by_node.sort_by_key(|&i| level.instance(i).node);
+        for (k, p) in places.iter().enumerate() {
+            let c = level.instance(by_node[k]);
+            let r = Received::over(&c.placed, c.received).unwrap();
+            // Reference: 4096 points of its box, each ray's product of the others' tau.
+            let (lo, hi) = image_tables[original(k)].bounds();
+            let m = 4096u32;
+            let mut sum = 0.0f64;
+            for j in 0..m {
+                let u = |s: u32| {
+                    ((j.wrapping_mul(2654435761).wrapping_add(s * 40503)) % 9973) as f32 / 9973.0
+                };
+                let x = p.point(lo + (hi - lo) * Vec3::new(u(1), u(2), u(3)));
+                let y = x + sun * 100.0;
+                let mut t = 1.0f32;
+                for (k2, p2) in places.iter().enumerate() {
+                    let tables = &image_tables[original(k2)];
+                    let (lo2, hi2) = tables.bounds();
+                    if k2 != k && meets(p2, lo2, hi2, x, y) {
+                        t *= tables.tau(p2.rotation.conjugate() * sun);
+                    }
+                }
+                sum += t as f64;
+            }
+            let v = (sum / m as f64) as f32;
+            if v < 0.97 {
+                shaded += 1;
+            }
+            let shadow =
+                p.scale * p.scale * image_tables[original(k)].shadow(p.rotation.conjugate() * sun);
+            for (band, e) in [500.0f32, 400.0].into_iter().enumerate() {
+                let want = e * shadow * v;
+                let got = r.intercepted(band);
+                assert!(
+                    (got - want).abs() <= 0.04 * e * shadow + 1e-6,
+                    "instance {k} band {band}: {got} vs {want} (seen {v})"
+                );
+            }
+        }
+    })
+    .unwrap();
+    assert!(shaded >= 2, "the test must shade some instances: {shaded}");
 }

@@ -198,7 +198,8 @@ fn closed_instance<S: SceneSource>(
     }
     Ok(Census {
         instances: 1,
-        received_floats: crate::tables::closed::received_floats(
+        // The direct light of suns and sky, and all the light.
+        received_floats: 2 * crate::tables::closed::received_floats(
             t.bands as usize,
             t.scatterers as usize,
             t.incoming_side as usize * t.incoming_side as usize,

@@ -23,7 +23,7 @@ pub struct ClosedInstance<'a> {
     pub bounds: Aabb,
     /// Its original's tables as the level reads them from its workspace, placed.
     pub placed: Placed<'a>,
-    /// Floats of received light kept for it (all zero after loading).
+    /// All the light it received (after loading, the direct light of suns and sky).
     pub received: &'a [f32],
 }
 
@@ -80,8 +80,9 @@ impl Level<'_> {
 }
 
 /// Counts, lays out and loads the scene's top level under `instancing` into `workspace`
-/// (its suggested size from the level's census is up to the caller: give plenty), and lets
-/// `inspect` look at it.
+/// (its suggested size from the level's census is up to the caller: give plenty), builds the
+/// core's BVH, lights the closed instances by the suns and sky, and lets `inspect` look at
+/// it.
 pub fn load_level<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
@@ -106,12 +107,26 @@ pub fn load_level<S: SceneSource>(
         sources(view),
         info.bands as usize,
         settings,
-        false,
+        true,
         ws.len(),
     )
     .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
-    let ws = &mut ws[..lay.main_bytes];
-    let st = super::load::load(view, settings, instancing, &c, lay, ws)?;
+    let (ws, bvh_bytes, scratch) = super::run::parts(&lay, ws, 0)?;
+    let mut st = super::load::load(view, settings, instancing, &c, lay, ws)?;
+    let vis: super::vis::Vis<'_, crate::visibility::Unoccluded> =
+        super::vis::Vis::Internal(super::run::core_bvh(&st, ws, bvh_bytes)?);
+    let mut ex = super::exec::Sequential;
+    let mut seq = super::exec::Fallback {
+        inner: &mut ex,
+        scratch,
+    };
+    super::instance_light::light_instances(
+        &mut st,
+        ws,
+        &vis,
+        &mut seq,
+        &mut super::exec::NoProgress,
+    );
     let ws: &[u8] = ws;
     inspect(&Level { st: &st, ws });
     Ok(LevelCounts {

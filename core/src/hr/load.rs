@@ -297,7 +297,8 @@ fn add_instance<S: SceneSource>(
         return Err(HrError::SceneTooLarge);
     }
     s.instances += 1;
-    let received = received_floats(&record);
+    // The direct light, then all the light (see `State::received`).
+    let received = 2 * received_floats(&record);
     if s.received_floats + received > lay.n_received_floats() {
         return Err(HrError::SceneTooLarge);
     }

@@ -32,6 +32,7 @@ mod exec;
 mod final_gather;
 mod gather_rays;
 mod ids;
+mod instance_light;
 mod layout;
 mod load;
 mod oriented;

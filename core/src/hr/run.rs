@@ -8,8 +8,8 @@ use super::layout::Layout;
 use super::plan::{aligned, plan_from, sources};
 use super::settings::{Instancing, Settings, Stats};
 use super::{
-    balance, bins, closure, direct, gather_rays, load, output, pending, refine, relight, solve,
-    state, vis,
+    balance, bins, closure, direct, gather_rays, instance_light, load, output, pending, refine,
+    relight, solve, state, vis,
 };
 use crate::image::{SceneSource, SceneView};
 use crate::sink::Sink;
@@ -47,6 +47,35 @@ pub(super) fn parts<'w>(
         bytemuck::try_cast_slice_mut(&mut scratch_bytes[..lay.scratch_floats * 4])
             .map_err(|_| too_small)?;
     Ok((main, bvh_bytes, scratch))
+}
+
+/// The core's own BVH over the loaded polygons, built in `bvh_bytes`.
+pub(super) fn core_bvh<'w>(
+    st: &state::State,
+    ws: &[u8],
+    bvh_bytes: &'w mut [u8],
+) -> Result<crate::bvh::Bvh<'w>, HrError> {
+    let n = st.polygons as usize;
+    let (nodes, order) = bvh_bytes.split_at_mut(
+        crate::bvh::nodes_needed(st.polygons) * core::mem::size_of::<crate::bvh::BvhNode>(),
+    );
+    let nodes: &mut [crate::bvh::BvhNode] =
+        bytemuck::try_cast_slice_mut(nodes).map_err(|_| HrError::SceneTooLarge)?;
+    let order: &mut [u32] =
+        bytemuck::try_cast_slice_mut(&mut order[..4 * n]).map_err(|_| HrError::SceneTooLarge)?;
+    let polys = vis::WsPolygons { st, ws };
+    crate::bvh::build(
+        st.polygons,
+        |id| crate::bvh::PolygonSet::bounds(&polys, id),
+        nodes,
+        order,
+    )
+    .map_err(|e| match e {
+        crate::bvh::BvhError::InvalidBounds { primitive } => HrError::BadGeometry {
+            polygon: primitive as u64,
+        },
+        _ => HrError::SceneTooLarge,
+    })
 }
 
 impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
@@ -100,31 +129,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             })?;
         let vis = match visibility {
             Some(v) => vis::Vis::External(v),
-            None => {
-                let n = st.polygons as usize;
-                let (nodes, order) = bvh_bytes.split_at_mut(
-                    crate::bvh::nodes_needed(st.polygons)
-                        * core::mem::size_of::<crate::bvh::BvhNode>(),
-                );
-                let nodes: &mut [crate::bvh::BvhNode] =
-                    bytemuck::try_cast_slice_mut(nodes).map_err(|_| HrError::SceneTooLarge)?;
-                let order: &mut [u32] = bytemuck::try_cast_slice_mut(&mut order[..4 * n])
-                    .map_err(|_| HrError::SceneTooLarge)?;
-                let polys = vis::WsPolygons { st: &st, ws };
-                let bvh = crate::bvh::build(
-                    st.polygons,
-                    |id| crate::bvh::PolygonSet::bounds(&polys, id),
-                    nodes,
-                    order,
-                )
-                .map_err(|e| match e {
-                    crate::bvh::BvhError::InvalidBounds { primitive } => HrError::BadGeometry {
-                        polygon: primitive as u64,
-                    },
-                    _ => HrError::SceneTooLarge,
-                })?;
-                vis::Vis::Internal(bvh)
-            }
+            None => vis::Vis::Internal(core_bvh(&st, ws, bvh_bytes)?),
         };
         st.stats.workspace_bytes = total as u64;
         bins::allocate(&mut st, ws);
@@ -134,6 +139,9 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             scratch,
         };
         direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+        if st.instances > 0 {
+            instance_light::light_instances(&mut st, ws, &vis, &mut seq, progress);
+        }
         bins::areas(&st, ws);
         direct::test_closed(&mut st, ws, &vis);
         if let Some(band) = direct::no_steady_state(&st, ws) {

@@ -417,10 +417,25 @@ impl State {
     /// Closed instance `i`'s original's tables, placed by its transform.
     pub(crate) fn placed<'a>(&self, ws: &'a [u8], i: u32) -> crate::tables::closed::Placed<'a> {
         let leaf = self.instance(ws, i);
-        let slot = self.slot(ws, leaf.slot);
+        self.placed_in(&leaf, &ws[self.lay.slots..], self.lay.slots)
+    }
+
+    /// The tables of `leaf` placed, read from `part`, the workspace from byte `base` on
+    /// (the table slots and values lie there).
+    fn placed_in<'a>(
+        &self,
+        leaf: &InstanceLeaf,
+        part: &'a [u8],
+        base: usize,
+    ) -> crate::tables::closed::Placed<'a> {
+        let slot: TableSlot = read(
+            part,
+            self.lay.slots - base + leaf.slot as usize * core::mem::size_of::<TableSlot>(),
+        );
         let r = &slot.record;
-        let values = floats(ws, slot.values as usize, r.values() as usize);
-        let visible = &ws[slot.visible as usize..(slot.visible + r.visible_bytes()) as usize];
+        let values = floats(part, slot.values as usize - base, r.values() as usize);
+        let v0 = slot.visible as usize - base;
+        let visible = &part[v0..v0 + r.visible_bytes() as usize];
         let tables = crate::tables::directional::DirectionalTables::trusted(r, values, visible);
         let place = crate::geometry::Similarity {
             rotation: glam::Quat::from_array(leaf.rotation),
@@ -430,11 +445,44 @@ impl State {
         crate::tables::closed::Placed::new(tables, place)
     }
 
-    /// The floats of the light closed instance `i` received.
-    pub(crate) fn received<'a>(&self, ws: &'a [u8], i: u32) -> &'a [f32] {
+    /// Where closed instance `i`'s received light lies: the float offset in the received
+    /// region of part `part` (0: the direct light of suns and sky, fixed once lit; 1: all
+    /// the light, direct and through links) and its length.
+    pub(crate) fn received_at(&self, ws: &[u8], i: u32, part: usize) -> (usize, usize) {
         let leaf = self.instance(ws, i);
         let n = self.placed(ws, i).received_len();
-        floats(ws, self.lay.received + 4 * leaf.received as usize, n)
+        (
+            self.lay.received + 4 * (leaf.received as usize + part * n),
+            n,
+        )
+    }
+
+    /// All the light closed instance `i` received (see `received_at`).
+    pub(crate) fn received<'a>(&self, ws: &'a [u8], i: u32) -> &'a [f32] {
+        let (at, n) = self.received_at(ws, i, 1);
+        floats(ws, at, n)
+    }
+
+    /// Calls `f` with closed instance `i`'s tables placed and a mutable view of part `part`
+    /// of its received light (see `received_at`).
+    pub(crate) fn with_received<R>(
+        &self,
+        ws: &mut [u8],
+        i: u32,
+        part: usize,
+        f: impl FnOnce(
+            &crate::tables::closed::Placed<'_>,
+            &mut crate::tables::closed::Received<&mut [f32]>,
+        ) -> R,
+    ) -> Option<R> {
+        let leaf = self.instance(ws, i);
+        let (at, n) = self.received_at(ws, i, part);
+        let split = self.lay.slots;
+        let (head, tail) = ws.split_at_mut(split);
+        let placed = self.placed_in(&leaf, tail, split);
+        let values = floats_mut(head, at, n);
+        let mut received = crate::tables::closed::Received::over(&placed, values).ok()?;
+        Some(f(&placed, &mut received))
     }
 
     pub(crate) fn polygon(&self, ws: &[u8], i: u32) -> Polygon {

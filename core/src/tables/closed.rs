@@ -145,25 +145,26 @@ impl<'a> Placed<'a> {
 /// The light a closed instance has received, over caller storage of
 /// [`Placed::received_len`] floats: per band the power intercepted and scattered out (W),
 /// per polygon kept apart and side lit the irradiance on it (W/m^2, original's units), per
-/// incoming cell and side lit the scattered power's weight (W).
+/// incoming cell and side lit the scattered power's weight (W). `S` is the storage: a
+/// mutable slice to receive light, a shared one to read it.
 #[derive(Debug)]
-pub struct Received<'s> {
-    values: &'s mut [f32],
+pub struct Received<S> {
+    values: S,
     bands: usize,
     polygons: usize,
 }
 
-impl<'s> Received<'s> {
-    /// Storage for the light `placed` receives, cleared.
-    pub fn new(placed: &Placed<'_>, values: &'s mut [f32]) -> Result<Self, TableError> {
+impl<S: AsRef<[f32]>> Received<S> {
+    /// The light `placed` received, kept in `values` (nothing is cleared).
+    pub fn over(placed: &Placed<'_>, values: S) -> Result<Self, TableError> {
         let expected = placed.received_len();
-        if values.len() != expected {
+        let given = values.as_ref().len();
+        if given != expected {
             return Err(TableError::Length {
                 expected: expected as u64,
-                given: values.len() as u64,
+                given: given as u64,
             });
         }
-        values.fill(0.0);
         Ok(Self {
             values,
             bands: placed.tables.phase().bands(),
@@ -171,9 +172,8 @@ impl<'s> Received<'s> {
         })
     }
 
-    /// Forgets all light received.
-    pub fn clear(&mut self) {
-        self.values.fill(0.0);
+    fn v(&self) -> &[f32] {
+        self.values.as_ref()
     }
 
     fn polygon_at(&self, p: usize, side: usize, band: usize) -> usize {
@@ -186,17 +186,89 @@ impl<'s> Received<'s> {
 
     /// Power intercepted by the contents in band `band` (W).
     pub fn intercepted(&self, band: usize) -> f32 {
-        self.values[band]
+        self.v()[band]
     }
 
     /// Power scattered out of the box in band `band` (W).
     pub fn scattered(&self, band: usize) -> f32 {
-        self.values[self.bands + band]
+        self.v()[self.bands + band]
     }
 
     /// Power absorbed inside in band `band` (W): intercepted less scattered out.
     pub fn absorbed(&self, band: usize) -> f32 {
         self.intercepted(band) - self.scattered(band)
+    }
+
+    /// Intensity (W/sr) that leaves the instance towards the world direction `observer` in
+    /// band `band`, from all the light received.
+    pub fn intensity(&self, placed: &Placed<'_>, observer: Vec3, band: usize) -> f32 {
+        let o = placed.local(observer);
+        if o == Vec3::ZERO || band >= self.bands {
+            return 0.0;
+        }
+        let t = &placed.tables;
+        let phase = t.phase();
+        let v = self.v();
+        // The rest: what the incoming cells hold, through the response towards `o`.
+        let out = phase.outgoing().weights(o);
+        let mut rest = 0.0f32;
+        for c in 0..phase.incoming().cells() {
+            for side in 0..2 {
+                let w = v[self.cell_at(c as usize, side, band)];
+                if w == 0.0 {
+                    continue;
+                }
+                let r: f32 = out
+                    .iter()
+                    .map(|&(co, wo)| wo * phase.response_at(c, co, side, band))
+                    .sum();
+                rest += w * r;
+            }
+        }
+        let mut sum = rest * t.shadow(o);
+        // The first scattering: each polygon's lit sides as the observer sees them.
+        if let Some(single) = t.single() {
+            let wo = single.grid().weights(o);
+            for p in 0..self.polygons {
+                let (n, area, [rho_front, rho_back, tau]) = single.polygon(p, band);
+                let co = n.dot(o);
+                if co == 0.0 {
+                    continue;
+                }
+                let front = v[self.polygon_at(p, 0, band)];
+                let back = v[self.polygon_at(p, 1, band)];
+                let k = if co > 0.0 {
+                    rho_front * front + tau * back
+                } else {
+                    rho_back * back + tau * front
+                };
+                if k > 0.0 {
+                    sum += area * co.abs() * single.fraction(&wo, p) * k / core::f32::consts::PI;
+                }
+            }
+        }
+        placed.area_scale * sum
+    }
+}
+
+impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
+    /// Storage for the light `placed` receives, cleared.
+    pub fn new(placed: &Placed<'_>, values: S) -> Result<Self, TableError> {
+        let mut r = Self::over(placed, values)?;
+        r.clear();
+        Ok(r)
+    }
+
+    /// Forgets all light received.
+    pub fn clear(&mut self) {
+        self.values.as_mut().fill(0.0);
+    }
+
+    /// Adds all the light `other` (of the same instance) received.
+    pub fn add<T: AsRef<[f32]>>(&mut self, other: &Received<T>) {
+        for (a, b) in self.values.as_mut().iter_mut().zip(other.v()) {
+            *a += b;
+        }
     }
 
     /// Adds a beam: `irradiance` (W/m^2 per band, on a plane facing the source) from the
@@ -218,95 +290,62 @@ impl<'s> Received<'s> {
             if !(e.is_finite() && e > 0.0) {
                 continue;
             }
-            self.values[band] += e * scale * shadow;
+            let (nb, polygons) = (self.bands, self.polygons);
+            let scattered_at = nb + band;
             let by_side = [t.scattered_by(d, 0, band), t.scattered_by(d, 1, band)];
             let total = by_side[0] + by_side[1];
-            self.values[self.bands + band] += e * scale * total;
-            // The light scattered more than once, by the incoming cells where each side is
-            // lit (as `PhaseTable::response` weighs them).
-            for (side, &s) in by_side.iter().enumerate() {
-                if !side_lit(s, total) {
-                    continue;
-                }
-                let lit = |c: u32| t.phase().share_at(c, side, band) >= LIT_SHARE;
-                let sum: f32 = weights
-                    .iter()
-                    .filter(|&&(c, w)| w > 0.0 && lit(c))
-                    .map(|&(_, w)| w)
-                    .sum();
-                if sum <= 0.0 {
-                    continue;
-                }
-                for &(c, w) in &weights {
-                    if w > 0.0 && lit(c) {
-                        let at = self.cell_at(c as usize, side, band);
-                        self.values[at] += e * s * w / sum;
-                    }
-                }
+            let cells: heapless::Vec<(usize, f32), 8> =
+                lit_cells(t, &weights, &by_side, total, band)
+                    .map(|(c, side, w)| (self.cell_at(c as usize, side, band), w))
+                    .collect();
+            let v = self.values.as_mut();
+            v[band] += e * scale * shadow;
+            v[scattered_at] += e * scale * total;
+            for (at, w) in cells {
+                v[at] += e * w;
             }
             // The first scattering, polygon by polygon.
             if let (Some(single), Some(wd)) = (single, wd.as_ref()) {
-                for p in 0..self.polygons {
+                for p in 0..polygons {
                     let (n, _, _) = single.polygon(p, band);
                     let cd = n.dot(d);
                     if cd == 0.0 {
                         continue;
                     }
                     let side = usize::from(cd < 0.0);
-                    let at = self.polygon_at(p, side, band);
-                    self.values[at] += e * cd.abs() * single.fraction(wd, p);
+                    let at = 2 * nb + (p * 2 + side) * nb + band;
+                    v[at] += e * cd.abs() * single.fraction(wd, p);
                 }
             }
         }
     }
+}
 
-    /// Intensity (W/sr) that leaves the instance towards the world direction `observer` in
-    /// band `band`, from all the light received.
-    pub fn intensity(&self, placed: &Placed<'_>, observer: Vec3, band: usize) -> f32 {
-        let o = placed.local(observer);
-        if o == Vec3::ZERO || band >= self.bands {
-            return 0.0;
-        }
-        let t = &placed.tables;
-        let phase = t.phase();
-        // The rest: what the incoming cells hold, through the response towards `o`.
-        let out = phase.outgoing().weights(o);
-        let mut rest = 0.0f32;
-        for c in 0..phase.incoming().cells() {
-            for side in 0..2 {
-                let w = self.values[self.cell_at(c as usize, side, band)];
-                if w == 0.0 {
-                    continue;
-                }
-                let r: f32 = out
-                    .iter()
-                    .map(|&(co, wo)| wo * phase.response_at(c, co, side, band))
-                    .sum();
-                rest += w * r;
-            }
-        }
-        let mut sum = rest * t.shadow(o);
-        // The first scattering: each polygon's lit sides as the observer sees them.
-        if let Some(single) = t.single() {
-            let wo = single.grid().weights(o);
-            for p in 0..self.polygons {
-                let (n, area, [rho_front, rho_back, tau]) = single.polygon(p, band);
-                let co = n.dot(o);
-                if co == 0.0 {
-                    continue;
-                }
-                let front = self.values[self.polygon_at(p, 0, band)];
-                let back = self.values[self.polygon_at(p, 1, band)];
-                let k = if co > 0.0 {
-                    rho_front * front + tau * back
-                } else {
-                    rho_back * back + tau * front
-                };
-                if k > 0.0 {
-                    sum += area * co.abs() * single.fraction(&wo, p) * k / core::f32::consts::PI;
-                }
-            }
-        }
-        placed.area_scale * sum
-    }
+/// The incoming cells around a direction of weights `weights` where each side is lit, with
+/// the scattered power (per unit irradiance, m^2) each holds of the light scattered more
+/// than once: as `PhaseTable::response` weighs them, renormalised over the lit cells.
+fn lit_cells<'t>(
+    t: &'t DirectionalTables<'_>,
+    weights: &'t [(u32, f32); 4],
+    by_side: &'t [f32; 2],
+    total: f32,
+    band: usize,
+) -> impl Iterator<Item = (u32, usize, f32)> + 't {
+    (0..2usize).flat_map(move |side| {
+        let s = by_side[side];
+        let lit = move |c: u32| t.phase().share_at(c, side, band) >= LIT_SHARE;
+        let sum: f32 = if side_lit(s, total) {
+            weights
+                .iter()
+                .filter(|&&(c, w)| w > 0.0 && lit(c))
+                .map(|&(_, w)| w)
+                .sum()
+        } else {
+            0.0
+        };
+        weights
+            .iter()
+            .filter(move |&&(c, w)| sum > 0.0 && w > 0.0 && lit(c))
+            .map(move |&(c, w)| (c, side, s * w / sum))
+    })
 }

@@ -163,6 +163,26 @@ fn the_received_light_sends_the_sum_of_its_beams() {
                     );
                 }
             }
+            // The same beams received in two parts and added: the same light.
+            let mut first = vec![0.0f32; placed.received_len()];
+            let mut second = vec![0.0f32; placed.received_len()];
+            let mut a = Received::new(&placed, &mut first).unwrap();
+            let mut b = Received::new(&placed, &mut second).unwrap();
+            for (k, (d, e)) in beams.iter().enumerate() {
+                if k % 2 == 0 {
+                    a.receive(&placed, *d, e);
+                } else {
+                    b.receive(&placed, *d, e);
+                }
+            }
+            a.add(&b);
+            for o in spread(10, 0.3) {
+                let (x, y) = (
+                    a.intensity(&placed, o, 1),
+                    received.intensity(&placed, o, 1),
+                );
+                assert!((x - y).abs() <= 1e-4 * y.max(1e-6));
+            }
             received.clear();
             assert_eq!(received.intensity(&placed, Vec3::Z, 0), 0.0);
             assert_eq!(received.intercepted(1), 0.0);

@@ -1,0 +1,141 @@
+//! The direct light of suns and sky on the closed instances of a level: each instance sees
+//! each source through the level's polygons and the other closed instances, on average over
+//! points spread through its original's box (placed), and keeps that light as a beam of its
+//! received light (see `tables::closed`). Its own contents' shadows are in its tables.
+//!
+//! Work goes in fixed chunks of (instance, source) pairs; every point comes from a hash of
+//! the instance, the source and the point's number, so results never depend on the thread
+//! count.
+
+use super::blockers::SKIP_INSTANCE;
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::ids::{Elem, Kind};
+use super::layout::CHUNK;
+use super::state::State;
+use super::vis::{Ray, Vis, WsPolygons};
+use crate::limits::NONE;
+use crate::sampling::hash3;
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// Points per instance for a sun, per visibility ray of the settings.
+const SUN_POINTS: u32 = 16;
+/// Points per instance for one sky direction, per visibility ray of the settings.
+const SKY_POINTS: u32 = 2;
+
+/// Points of a box for source `k` of `suns` suns at `rays` rays per setting.
+fn points(k: u32, suns: u32, rays: u32) -> u32 {
+    rays.max(1) * if k < suns { SUN_POINTS } else { SKY_POINTS }
+}
+
+/// A point of the unit cube from three hashes, stratified along a Halton-like sequence.
+fn unit3(i: u32, k: u32, j: u32) -> Vec3 {
+    let h = hash3(i, k, j);
+    let f = |x: u32| (x & 0x3FF) as f32 / 1024.0 + 0.5 / 1024.0;
+    Vec3::new(f(h), f(h >> 10), f(h >> 20))
+}
+
+/// The mean transmittance from points of closed instance `i`'s box to source `k`, and the
+/// rays cast.
+fn visible_fraction<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    ray: &Ray<'_, V>,
+    i: u32,
+    k: u32,
+) -> (f32, u32) {
+    let src = st.shape(ws, Elem::new(Kind::Source, k));
+    let super::state::Shape::Source { towards } = src else {
+        return (0.0, 0);
+    };
+    let placed = st.placed(ws, i);
+    let (lo, hi) = placed.tables().bounds();
+    let place = placed.place();
+    let n = points(k, st.suns, st.settings.rays);
+    let mut sum = 0.0f32;
+    for j in 0..n {
+        let local = lo + (hi - lo) * unit3(i, k, j);
+        let x = place.point(local);
+        let end = st.beyond(x, towards);
+        sum += ray.transmittance_towards(x, end, towards, [SKIP_INSTANCE | i, NONE]);
+    }
+    (sum / n as f32, n)
+}
+
+struct Ctx<'a, 'v, V: ?Sized> {
+    st: &'a mut State,
+    ws: &'a mut [u8],
+    vis: &'a Vis<'v, V>,
+}
+
+/// Lights every closed instance by every source: clears and fills the direct part of its
+/// received light, and starts the whole light from it.
+pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+) {
+    let (instances, sources) = (st.instances as usize, st.sources as usize);
+    for i in 0..st.instances {
+        st.with_received(ws, i, 0, |_, r| r.clear());
+    }
+    let pairs = instances * sources;
+    if pairs > 0 {
+        let mut ctx = Ctx { st, ws, vis };
+        run_chunks(
+            ex,
+            &mut ctx,
+            pairs.div_ceil(CHUNK),
+            2 * CHUNK,
+            |c: &Ctx<'_, '_, V>, chunk, buf| {
+                let ray = Ray {
+                    vis: c.vis,
+                    polys: WsPolygons { st: c.st, ws: c.ws },
+                };
+                for (slot, p) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(pairs)).enumerate() {
+                    let (i, k) = ((p / sources) as u32, (p % sources) as u32);
+                    let (t, rays) = visible_fraction(c.st, c.ws, &ray, i, k);
+                    buf[2 * slot] = t;
+                    buf[2 * slot + 1] = rays as f32;
+                }
+            },
+            |c: &mut Ctx<'_, '_, V>, chunk, buf| {
+                for (slot, p) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(pairs)).enumerate() {
+                    let (i, k) = ((p / sources) as u32, (p % sources) as u32);
+                    let (t, rays) = (buf[2 * slot], buf[2 * slot + 1] as u64);
+                    c.st.stats.rays += rays;
+                    c.st.stats.rays_by_phase.lighting += rays;
+                    let src = Elem::new(Kind::Source, k);
+                    let super::state::Shape::Source { towards } = c.st.shape(c.ws, src) else {
+                        continue;
+                    };
+                    let mut e = [0.0f32; crate::limits::MAX_BANDS];
+                    let nb = c.st.bands;
+                    if let Some(b) = c.st.b(c.ws, src, 0) {
+                        for (o, v) in e.iter_mut().zip(b) {
+                            *o = v * t;
+                        }
+                    }
+                    c.st.with_received(c.ws, i, 0, |placed, r| {
+                        r.receive(placed, towards, &e[..nb])
+                    });
+                }
+            },
+            &mut |done, total| {
+                progress.report("lighting closed instances", done as u64, total as u64)
+            },
+        );
+    }
+    start_from_direct(st, ws);
+}
+
+/// Sets every closed instance's whole light to its direct light (before links add theirs).
+pub(crate) fn start_from_direct(st: &State, ws: &mut [u8]) {
+    for i in 0..st.instances {
+        let (a, n) = st.received_at(ws, i, 0);
+        let (b, _) = st.received_at(ws, i, 1);
+        ws.copy_within(a..a + 4 * n, b);
+    }
+}
