@@ -276,6 +276,24 @@ fn a_closed_instance_without_tables_is_refused() {
     .unwrap();
 }
 
+/// Of the chord of `place`'s box `lo..hi` along the line through `a` and `b`, the share the
+/// segment `a..b` runs through (points along the line, from 2 segment lengths before `a` to
+/// 2 after `b`), or `None` when the segment misses the box.
+fn chord_share(place: &Similarity, lo: Vec3, hi: Vec3, a: Vec3, b: Vec3) -> Option<f32> {
+    let steps = 100_000;
+    let (mut on_line, mut on_segment) = (0u32, 0u32);
+    for j in 0..=steps {
+        let s = -2.0 + 5.0 * j as f32 / steps as f32;
+        if inside(place, lo, hi, a + (b - a) * s) {
+            on_line += 1;
+            if (0.0..=1.0).contains(&s) {
+                on_segment += 1;
+            }
+        }
+    }
+    (on_segment > 0).then(|| on_segment as f32 / on_line as f32)
+}
+
 /// A point of `place`'s original box `lo..hi`, or not (the inverse transform, in f64).
 fn inside(place: &Similarity, lo: Vec3, hi: Vec3, w: Vec3) -> bool {
     let local = place.rotation.conjugate() * (w - place.translation) / place.scale;
@@ -313,11 +331,9 @@ fn closed_instances_block_by_tau_along_what_they_cross() {
                     }
                     let tables = &image_tables[original(k)];
                     let (lo, hi) = tables.bounds();
-                    let steps = 20_000;
-                    if (0..=steps)
-                        .any(|j| inside(p, lo, hi, a + (b - a) * (j as f32 / steps as f32)))
-                    {
-                        t *= tables.tau(p.rotation.conjugate() * d);
+                    if let Some(share) = chord_share(p, lo, hi, a, b) {
+                        let tau = tables.tau(p.rotation.conjugate() * d);
+                        t *= if share >= 1.0 { tau } else { tau.powf(share) };
                         crossed += 1;
                     }
                 }
@@ -331,8 +347,9 @@ fn closed_instances_block_by_tau_along_what_they_cross() {
                 let (want, crossed) = reference(a, b, None);
                 crossings += crossed;
                 let got = level.transmittance(a, b, None);
+                // Partial crossings' shares are sampled in the reference.
                 assert!(
-                    (got - want).abs() < 1e-5,
+                    (got - want).abs() < 1e-5 + 0.01 * want,
                     "segment {k}: {got} vs {want} ({crossed} boxes)"
                 );
             }
@@ -345,13 +362,13 @@ fn closed_instances_block_by_tau_along_what_they_cross() {
                 let (want, _) = reference(a, b, Some(k));
                 let got = level.transmittance(a, b, Some(by_node[k]));
                 assert!(
-                    (got - want).abs() < 1e-5,
+                    (got - want).abs() < 1e-5 + 0.01 * want,
                     "from inside {k}: {got} vs {want}"
                 );
                 let (with_self, _) = reference(a, b, None);
                 let got = level.transmittance(a, b, None);
                 assert!(
-                    (got - with_self).abs() < 1e-5,
+                    (got - with_self).abs() < 1e-5 + 0.01 * with_self,
                     "from inside {k}, not skipped"
                 );
             }
@@ -422,7 +439,14 @@ fn closed_instances_see_the_sun_through_the_others() {
                     let tables = &image_tables[original(k2)];
                     let (lo2, hi2) = tables.bounds();
                     if k2 != k && meets(p2, lo2, hi2, x, y) {
-                        t *= tables.tau(p2.rotation.conjugate() * sun);
+                        let tau = tables.tau(p2.rotation.conjugate() * sun);
+                        // A point inside a neighbour's box crosses part of it.
+                        let inside_it = inside(p2, lo2, hi2, x);
+                        t *= if inside_it {
+                            tau.powf(chord_share(p2, lo2, hi2, x, y).unwrap_or(1.0))
+                        } else {
+                            tau
+                        };
                     }
                 }
                 sum += t as f64;

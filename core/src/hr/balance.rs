@@ -154,7 +154,76 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
         );
         offset += n as u64;
     }
+    if st.instances > 0 {
+        let ray = Ray {
+            vis,
+            polys: WsPolygons { st, ws },
+        };
+        for i in 0..st.instances {
+            add_instance(st, ws, i, rays.max(1) * INSTANCE_RAYS, &ray, &mut ctx.out);
+        }
+    }
     ctx.out
+}
+
+/// Rays per closed instance for its scattered light's fate, per ray of a leaf.
+const INSTANCE_RAYS: u32 = 16;
+
+/// Adds closed instance `i`'s part of the balance: the direct light it intercepts, what it
+/// absorbs (intercepted less scattered out, all of it), and of what it scatters out, the
+/// part that escapes: `rays` directions spread evenly over the sphere from points of its
+/// box, each weighted by its intensity there, through the other closed instances' `tau`.
+fn add_instance<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    i: u32,
+    rays: u32,
+    vis: &V,
+    out: &mut Balance,
+) {
+    use crate::tables::closed::Received;
+    let nb = st.bands;
+    let placed = st.placed(ws, i);
+    let (d0, n) = st.received_at(ws, i, 0);
+    let direct = super::pool::floats(ws, d0, n);
+    let (Ok(direct), Ok(all)) = (
+        Received::over(&placed, direct),
+        Received::over(&placed, st.received(ws, i)),
+    ) else {
+        return;
+    };
+    for b in 0..nb {
+        out.direct[b] += direct.intercepted(b) as f64;
+        out.absorbed[b] += all.absorbed(b) as f64;
+    }
+    let seed = hash3(i, 0xBA1, 0x1A);
+    let mut escaped = [0.0f64; MAX_BANDS];
+    let mut sent = [0.0f64; MAX_BANDS];
+    for j in 0..rays {
+        let (u, v) = unit2(hash3(seed, j, 0x22));
+        let z = 1.0 - 2.0 * u;
+        let r = libm::sqrtf((1.0 - z * z).max(0.0));
+        let phi = core::f32::consts::TAU * v;
+        let d = Vec3::new(r * libm::cosf(phi), r * libm::sinf(phi), z);
+        let x = super::instance_kernel::point_of(st, ws, i, hash3(seed, j, 0x23));
+        let end = st.beyond(x, d);
+        let skip = [super::blockers::SKIP_INSTANCE | i, NONE];
+        let t = if vis.first_hit(x, end, skip).is_none() {
+            vis.transmittance(x, end, skip) as f64
+        } else {
+            0.0
+        };
+        for b in 0..nb {
+            let w = all.intensity(&placed, d, b) as f64;
+            sent[b] += w;
+            escaped[b] += w * t;
+        }
+    }
+    for b in 0..nb {
+        if sent[b] > 0.0 {
+            out.escaped[b] += all.scattered(b) as f64 * escaped[b] / sent[b];
+        }
+    }
 }
 
 /// Most rays for one leaf side.
@@ -250,7 +319,7 @@ fn fates<V: Visibility + ?Sized>(
         }
         let nr = if side == 0 { normal } else { -normal };
         let seed = hash3(e.0, side as u32, 0xBA1);
-        let (mut escaped, mut backs) = (0u32, 0u32);
+        let (mut escaped, mut backs) = (0.0f32, 0u32);
         // Directions are stratified too, in an order shuffled against the points' (a stride
         // coprime with the cell count), so that neither pairs with the other.
         let cells = grid * grid;
@@ -271,8 +340,11 @@ fn fates<V: Visibility + ?Sized>(
                 ((dc % grid) as f32 + du) / grid as f32,
                 ((dc / grid) as f32 + dv) / grid as f32,
             );
-            match vis.first_hit(x, st.beyond(x, d), [p.poly, NONE]) {
-                None => escaped += 1,
+            let end = st.beyond(x, d);
+            match vis.first_hit(x, end, [p.poly, NONE]) {
+                // What closed instances on the way intercept, their links carry.
+                None if st.instances > 0 => escaped += vis.transmittance(x, end, [p.poly, NONE]),
+                None => escaped += 1.0,
                 Some((hit, _)) if hit < st.polygons => {
                     let hp = st.polygon(ws, hit);
                     let one_sided = st.material(ws, hp.material).two_sided == 0;
@@ -283,7 +355,7 @@ fn fates<V: Visibility + ?Sized>(
                 Some(_) => {}
             }
         }
-        out[2 * side] = escaped as f32 / rays as f32;
+        out[2 * side] = escaped / rays as f32;
         out[2 * side + 1] = backs as f32 / rays as f32;
     }
     if State::sides(e) == 1 && st.sources > 0 {

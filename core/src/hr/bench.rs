@@ -39,6 +39,7 @@ pub fn start<S: SceneSource, V: Visibility + ?Sized, E: Executor>(
     let run = Run::start(
         view,
         settings,
+        Instancing::None,
         workspace,
         Some(vis),
         executor,

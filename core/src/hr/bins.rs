@@ -202,6 +202,8 @@ fn fill(st: &State, ws: &mut [u8], unit: bool, record: u32) {
                         }
                     }
                 }
+                // Its polygons' only (see `refine::must_open`).
+                Kind::Instance => {}
                 _ => {
                     let poly = st.patch(ws, child).poly;
                     add_polygon(st, ws, poly, unit, &mut acc[..len]);

@@ -79,16 +79,12 @@ pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [
     if st.instances == 0 {
         return 1.0;
     }
-    let d = (to - from).normalize_or_zero();
     let mut t = 1.0f32;
     bvh(st, ws).any_hit(from, to, |i| {
         if skip.contains(&(SKIP_INSTANCE | i)) {
             return false;
         }
-        let placed = st.placed(ws, i);
-        if placed.crosses(from, to) {
-            t *= placed.tau(d);
-        }
+        t *= st.placed(ws, i).transmittance(from, to);
         t <= 0.0
     });
     t.max(0.0)

@@ -112,6 +112,29 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
 ) -> Coefficients {
     let seed = hash3(recv.0, emit.0, 0x11AD);
     let rays = st.settings.rays.max(1);
+    if super::refine::must_open(st, ws, recv, emit).is_some() {
+        // Split before it carries anything (see `refine::must_open`).
+        return Coefficients::default();
+    }
+    if recv.kind() == super::ids::Kind::Instance || emit.kind() == super::ids::Kind::Instance {
+        // Its decisions come from an estimate of their own, as every link's.
+        let mut out = super::instance_kernel::evaluate(st, ws, recv, emit, vis, seed, rays);
+        let d = super::instance_kernel::evaluate(
+            st,
+            ws,
+            recv,
+            emit,
+            vis,
+            hash3(seed, 0xDEC1DE, 0x5EE),
+            rays.div_ceil(4),
+        );
+        out.open = d.open;
+        out.partial = d.partial;
+        out.spread = d.spread;
+        out.seen = d.k.iter().flatten().sum();
+        out.rays += d.rays;
+        return out;
+    }
     let mut out = match shot(st, ws, recv, emit, seed, rays, vis) {
         Some(c) => c,
         None => evaluate_seeded(st, ws, recv, emit, vis, seed, rays, true),
@@ -234,9 +257,9 @@ pub(crate) fn evaluate_seeded<V: Visibility + ?Sized>(
                 out.witness = witnesses(&r, &wit);
             }
         }
-        // Receiving clusters are gathered (see `gathered_link`).
-        Shape::Cluster { .. } => {}
-        Shape::Source { .. } => {}
+        // Receiving clusters are gathered (see `gathered_link`); links with closed
+        // instances are `instance_kernel`'s.
+        Shape::Cluster { .. } | Shape::Source { .. } | Shape::Instance { .. } => {}
     }
     out
 }
@@ -424,7 +447,7 @@ fn gather_link<V: Visibility + ?Sized>(
             }
             out.dir = mean;
         }
-        Shape::Source { .. } => {}
+        Shape::Source { .. } | Shape::Instance { .. } => {}
     }
     if emit.kind() == super::ids::Kind::Cluster {
         out.witness = witnesses(r, &wit);
@@ -445,7 +468,9 @@ pub(crate) fn witnesses(r: &Shape, wit: &[Witnesses; 2]) -> [u32; 2] {
 /// of a receiving cluster are drawn towards ([`point_toward`]).
 fn reach_of(st: &State, ws: &[u8], emit: Elem) -> (Vec3, f32) {
     match st.shape(ws, emit) {
-        Shape::Cluster { min, max, .. } => ((min + max) * 0.5, 0.5 * (max - min).length()),
+        Shape::Cluster { min, max, .. } | Shape::Instance { min, max, .. } => {
+            ((min + max) * 0.5, 0.5 * (max - min).length())
+        }
         Shape::Patch {
             corners, n, area, ..
         } => {
@@ -678,8 +703,9 @@ fn to_point<V: Visibility + ?Sized>(
             out.partial |= v < 1.0;
             (open * v, open, 0, wit)
         }
-        // Larger clusters are gathered polygon by polygon (see `gathered_link`).
-        Shape::Cluster { .. } => (0.0, 0.0, 0, NO),
+        // Larger clusters are gathered polygon by polygon (see `gathered_link`), closed
+        // instances are `instance_kernel`'s.
+        Shape::Cluster { .. } | Shape::Instance { .. } => (0.0, 0.0, 0, NO),
         Shape::Source { towards } => {
             let c = nr.dot(towards);
             if c <= 0.0 {

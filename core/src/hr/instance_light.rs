@@ -134,8 +134,77 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
 /// Sets every closed instance's whole light to its direct light (before links add theirs).
 pub(crate) fn start_from_direct(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
-        let (a, n) = st.received_at(ws, i, 0);
-        let (b, _) = st.received_at(ws, i, 1);
-        ws.copy_within(a..a + 4 * n, b);
+        start_one(st, ws, i);
     }
+}
+
+/// The light every closed instance receives through its links, added to its direct light
+/// as beams (each link's flux density on a plane facing its emitter, from the link's
+/// direction; see `instance_kernel`). Returns the largest change of an instance's mean
+/// radiosity (W/m^2, see `instance_kernel::mean_radiosity`) and the largest such radiosity,
+/// which the solution's convergence test takes with the patches'.
+pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
+    let nb = st.bands;
+    let kk = st.lay.strides.link_k;
+    let (mut change, mut largest) = (0.0f32, 0.0f32);
+    for i in 0..st.instances {
+        let before = super::instance_kernel::mean_radiosity(st, ws, i);
+        start_one(st, ws, i);
+        let at = super::instance_kernel::centre_of(st, ws, i);
+        let mut cur = st.links_head(ws, Elem::new(Kind::Instance, i));
+        while cur != NONE {
+            let l = st.link(ws, cur);
+            let mut s = [0.0f32; crate::limits::MAX_BANDS];
+            link_flux(st, ws, cur, at, kk, &mut s[..nb]);
+            let dir = Vec3::from(l.dir);
+            st.with_received(ws, i, 1, |placed, r| r.receive(placed, dir, &s[..nb]));
+            cur = l.next;
+        }
+        let after = super::instance_kernel::mean_radiosity(st, ws, i);
+        change = change.max((after - before).abs());
+        largest = largest.max(after);
+    }
+    (change, largest)
+}
+
+/// The flux density (W/m^2 per band, on a plane facing the emitter) that link `i` brings a
+/// closed instance centred at `at`: its coefficients times its emitter's radiosity, as a
+/// patch's front gathers it.
+fn link_flux(st: &State, ws: &[u8], i: u32, at: Vec3, kk: usize, out: &mut [f32]) {
+    let l = st.link(ws, i);
+    let k = st.link_k(ws, i);
+    let emit = Elem(l.emit);
+    let nb = out.len();
+    let mut b = [0.0f32; crate::limits::MAX_BANDS];
+    out.fill(0.0);
+    if super::oriented::witnessed(&l) {
+        let coef = k[0];
+        if coef != 0.0 {
+            super::oriented::witness_radiosity(st, ws, &l, 0, false, false, &mut b[..nb]);
+            for (o, v) in out.iter_mut().zip(&b[..nb]) {
+                *o += coef * v;
+            }
+        }
+        return;
+    }
+    for s in 0..kk.min(2) {
+        let coef = if kk == 1 { k[0] } else { k[s] };
+        if coef == 0.0 {
+            continue;
+        }
+        let exact = l.flags & super::records::EXACT != 0;
+        if !super::oriented::radiosity_towards(st, ws, emit, s, at, false, exact, &mut b[..nb]) {
+            continue;
+        }
+        for (o, v) in out.iter_mut().zip(&b[..nb]) {
+            *o += coef * v;
+        }
+    }
+}
+
+/// Sets closed instance `i`'s whole light to its direct light.
+fn start_one(st: &State, ws: &mut [u8], i: u32) {
+    let (a, n) = st.received_at(ws, i, 0);
+    let (b, _) = st.received_at(ws, i, 1);
+    ws.copy_within(a..a + 4 * n, b);
 }

@@ -25,6 +25,10 @@ pub struct ClosedInstance<'a> {
     pub placed: Placed<'a>,
     /// All the light it received (after loading, the direct light of suns and sky).
     pub received: &'a [f32],
+    /// The direct light of suns and sky it received.
+    pub direct: &'a [f32],
+    /// Links it receives.
+    pub links: u32,
 }
 
 /// What a loaded level holds.
@@ -68,6 +72,36 @@ impl Level<'_> {
             bounds: Aabb::new(Vec3::from(leaf.bbox_min), Vec3::from(leaf.bbox_max)),
             placed: self.st.placed(self.ws, i),
             received: self.st.received(self.ws, i),
+            direct: {
+                let (at, n) = self.st.received_at(self.ws, i, 0);
+                super::pool::floats(self.ws, at, n)
+            },
+            links: {
+                let mut n = 0;
+                let mut cur = self.st.links_head(
+                    self.ws,
+                    super::ids::Elem::new(super::ids::Kind::Instance, i),
+                );
+                while cur != crate::limits::NONE {
+                    n += 1;
+                    cur = self.st.link(self.ws, cur).next;
+                }
+                n
+            },
+        }
+    }
+
+    /// The links closed instance `i` receives: the emitter's handle (kind in the top three
+    /// bits), the first coefficient and the flags.
+    pub fn links_of(&self, i: u32, mut f: impl FnMut(u32, f32, u32)) {
+        let mut cur = self.st.links_head(
+            self.ws,
+            super::ids::Elem::new(super::ids::Kind::Instance, i),
+        );
+        while cur != crate::limits::NONE {
+            let l = self.st.link(self.ws, cur);
+            f(l.emit, self.st.link_k(self.ws, cur)[0], l.flags);
+            cur = l.next;
         }
     }
 
@@ -175,4 +209,39 @@ fn order_consistent(st: &super::state::State, ws: &[u8]) -> bool {
         }
     }
     true
+}
+
+/// Solves the scene's top level under `instancing` with the core's BVH: refinement rounds,
+/// then `inspect` looks at the level (its closed instances' light), then the level's
+/// polygons go to `sink` and the stats come back.
+pub fn solve_level<S, K, E>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    instancing: Instancing,
+    workspace: &mut [u8],
+    executor: &mut E,
+    sink: &mut K,
+    inspect: impl FnOnce(&Level<'_>),
+) -> Result<super::Stats, super::SolveError<K::Error>>
+where
+    S: SceneSource,
+    K: crate::sink::Sink,
+    E: super::Executor,
+{
+    let mut progress = super::NoProgress;
+    let mut run = super::run::Run::<crate::visibility::Unoccluded, E>::start(
+        view,
+        settings,
+        instancing,
+        workspace,
+        None,
+        executor,
+        &mut progress,
+    )?;
+    run.rounds(&mut progress);
+    inspect(&Level {
+        st: &run.st,
+        ws: run.ws,
+    });
+    run.finish(&mut progress, sink)
 }

@@ -89,7 +89,7 @@ pub(crate) fn load<S: SceneSource>(
         prepared: [0; 2],
         pending: (u32::MAX, 0),
         pending_links: 0,
-        touched: [(0, u32::MAX); 3],
+        touched: [(0, u32::MAX); 4],
         shadow_checked: [0; 2],
         correction: NONE as usize,
         correction_split: 0,
@@ -101,6 +101,7 @@ pub(crate) fn load<S: SceneSource>(
         table_floats: 0,
         table_bytes: 0,
         received_floats: 0,
+        instance_change: (0.0, 0.0),
         scene_min: Vec3::ZERO,
         scene_max: Vec3::ZERO,
         stats: Stats {
@@ -319,11 +320,16 @@ fn add_instance<S: SceneSource>(
         slot,
         received: s.received_floats as u32,
         node,
-        reserved: 0,
+        area_ref: 0.0,
     };
     let at = lay.received + 4 * s.received_floats;
     ws[at..at + 4 * received].fill(0);
     s.received_floats += received;
+    s.set_instance(ws, i, &leaf);
+    // The mean cross-section over the sphere, times 4: the integral over pi.
+    let integral = s.placed(ws, i).tables().shadow_integral();
+    let mut leaf = leaf;
+    leaf.area_ref = place.scale * place.scale * integral / core::f32::consts::PI;
     s.set_instance(ws, i, &leaf);
     Ok(Elem::new(Kind::Instance, i))
 }
@@ -714,6 +720,8 @@ fn finish_clusters(s: &mut State, ws: &mut [u8]) {
                     let leaf = s.instance(ws, e.index());
                     b = b.union(Aabb::new(leaf.bbox_min.into(), leaf.bbox_max.into()));
                     instances += 1;
+                    // Its equivalent surface: a quarter of its reference area.
+                    area += 0.25 * leaf.area_ref;
                 }
                 _ => {
                     let p = s.patch(ws, e);

@@ -32,6 +32,7 @@ mod exec;
 mod final_gather;
 mod gather_rays;
 mod ids;
+mod instance_kernel;
 mod instance_light;
 mod layout;
 mod load;
@@ -85,7 +86,15 @@ where
     E: Executor,
     P: Progress,
 {
-    let mut run = Run::start(view, settings, workspace, visibility, executor, progress)?;
+    let mut run = Run::start(
+        view,
+        settings,
+        Instancing::None,
+        workspace,
+        visibility,
+        executor,
+        progress,
+    )?;
     run.rounds(progress);
     run.finish(progress, sink)
 }

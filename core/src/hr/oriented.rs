@@ -37,6 +37,7 @@ pub(crate) fn centre(st: &State, ws: &[u8], e: Elem) -> Vec3 {
             (Vec3::from(c.bbox_min) + Vec3::from(c.bbox_max)) * 0.5
         }
         Kind::Source => Vec3::ZERO,
+        Kind::Instance => super::instance_kernel::centre_of(st, ws, e.index()),
         _ => {
             let p = st.patch(ws, e);
             let n = p.corner_count();
@@ -170,6 +171,17 @@ pub(crate) fn radiosity_towards(
                 mean_facing(st, ws, emit.index(), w, unit, out);
             } else {
                 emission(st, ws, emit.index(), w, unit, out);
+            }
+            true
+        }
+        Kind::Instance => {
+            if side != 0 {
+                return false;
+            }
+            if unit {
+                out.fill(1.0);
+            } else {
+                super::instance_kernel::carried_radiosity(st, ws, emit.index(), towards, out);
             }
             true
         }

@@ -137,8 +137,10 @@ pub(crate) struct InstanceLeaf {
     pub received: u32,
     /// Its node in the image (to open it).
     pub node: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// Its reference area (m^2): 4 x its contents' cross-section `(1 - tau) A` averaged over
+    /// the sphere, the area of an isotropic volume that intercepts as much (see
+    /// `instance_kernel`).
+    pub area_ref: f32,
 }
 
 /// The tables of one original with closed instances, read into the workspace: its record

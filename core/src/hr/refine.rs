@@ -96,7 +96,7 @@ pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progre
 /// Forgets which links were examined, so that the next pass looks at them again with new
 /// radiosities.
 pub(crate) fn clear_examined(st: &mut State, ws: &mut [u8]) {
-    st.touched = [(0, u32::MAX); 3];
+    st.touched = [(0, u32::MAX); 4];
     st.shadow_checked = [0; 2];
     for i in 0..st.links.len {
         let mut l = st.link(ws, i);
@@ -112,7 +112,22 @@ fn kind_slot(k: Kind) -> usize {
     match k {
         Kind::Patch1 => 1,
         Kind::Patch2 => 2,
+        Kind::Instance => 3,
         _ => 0,
+    }
+}
+
+/// Which side of a link must open before the link can carry light: a cluster that holds
+/// closed instances (its kernels see only its polygons), the receiver first.
+/// `Some(true)` the receiver, `Some(false)` the emitter.
+pub(crate) fn must_open(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> Option<bool> {
+    let holds = |e: Elem| e.kind() == Kind::Cluster && st.cluster(ws, e.index()).instances > 0;
+    if holds(recv) {
+        Some(true)
+    } else if holds(emit) {
+        Some(false)
+    } else {
+        None
     }
 }
 
@@ -123,6 +138,11 @@ fn kind_slot(k: Kind) -> usize {
 fn b_max(st: &State, ws: &[u8], e: Elem) -> f32 {
     if e.kind() == Kind::Cluster {
         return st.cluster(ws, e.index()).peak;
+    }
+    if e.kind() == Kind::Instance {
+        // The radiosity its links carry on average: what it scatters over its reference
+        // area (see `instance_kernel`).
+        return super::instance_kernel::mean_radiosity(st, ws, e.index());
     }
     let mut m = 0.0f32;
     for side in 0..2 {
@@ -168,6 +188,8 @@ fn receiving_area(shape: &Shape) -> f32 {
             let box_mean = 0.5 * (d.x * d.y + d.y * d.z + d.x * d.z);
             (0.5 * area).min(box_mean.max(0.0))
         }
+        // Its mean cross-section.
+        Shape::Instance { area_ref, .. } => 0.25 * area_ref,
         Shape::Source { .. } => 0.0,
     }
 }
@@ -176,7 +198,9 @@ fn receiving_area(shape: &Shape) -> f32 {
 fn radius(shape: &Shape) -> f32 {
     match *shape {
         Shape::Patch { area, .. } => libm::sqrtf(area),
-        Shape::Cluster { min, max, .. } => 0.5 * (max - min).length(),
+        Shape::Cluster { min, max, .. } | Shape::Instance { min, max, .. } => {
+            0.5 * (max - min).length()
+        }
         Shape::Source { .. } => 0.0,
     }
 }
@@ -184,7 +208,8 @@ fn radius(shape: &Shape) -> f32 {
 fn can_split(st: &State, ws: &[u8], e: Elem) -> bool {
     match e.kind() {
         Kind::Cluster => st.cluster(ws, e.index()).child_count > 0,
-        Kind::Source => false,
+        // A closed instance opens in the next level, not in this one.
+        Kind::Source | Kind::Instance => false,
         _ => {
             let p = st.patch(ws, e);
             p.first_child != NONE
@@ -209,7 +234,7 @@ fn children(st: &mut State, ws: &mut [u8], e: Elem, out: &mut [Elem; MAX_KIDS]) 
             }
             Some(n)
         }
-        Kind::Source => Some(0),
+        Kind::Source | Kind::Instance => Some(0),
         k => {
             let p = st.patch(ws, e);
             if p.first_child == NONE {
@@ -292,6 +317,9 @@ fn choose(st: &State, ws: &[u8], recv: Elem, emit: Elem, rs: &Shape, es: &Shape)
     let emitter_refined = emit.is_patch() && st.patch(ws, emit).first_child != NONE;
     let prefer_emitter = match (recv.kind(), emit.kind()) {
         (_, Kind::Source) => false,
+        // A closed instance does not split: the other side does.
+        (Kind::Instance, _) => true,
+        (_, Kind::Instance) => false,
         // Clusters open before any patch splits: their isotropic kernel ignores orientation
         // (a lamp facing the floor would light it four times too weakly).
         (Kind::Cluster, Kind::Cluster) => re > rr,
@@ -432,12 +460,17 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
     let mut changed = false;
     // The receivers present when the pass starts (patches created during the pass only hold
     // pending links).
-    let counts = [st.clusters, st.patches[0].len, st.patches[1].len];
-    let kinds = [Kind::Cluster, Kind::Patch1, Kind::Patch2];
+    let counts = [
+        st.clusters,
+        st.patches[0].len,
+        st.patches[1].len,
+        st.instances,
+    ];
+    let kinds = [Kind::Cluster, Kind::Patch1, Kind::Patch2, Kind::Instance];
     // Only receivers that got links since the last pass (or since examination was cleared)
     // hold links left to examine; links added during this pass are for the next.
     let touched = st.touched;
-    st.touched = [(u32::MAX, 0); 3];
+    st.touched = [(u32::MAX, 0); 4];
     for ((kind, count), (lo, hi)) in kinds.into_iter().zip(counts).zip(touched) {
         for index in lo..hi.min(count) {
             let recv = Elem::new(kind, index);
@@ -471,7 +504,9 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                 // room sampled once on its ceiling, behind the lamp, lost the lamp's light):
                 // unless the emitter's plane hides the whole cluster, split it and look
                 // closer.
-                let dark = !self_link && l.k_open <= 0.0;
+                // A link that must open first carries nothing yet (see `must_open`).
+                let opening = must_open(st, ws, recv, emit);
+                let dark = !self_link && opening.is_none() && l.k_open <= 0.0;
                 // Only the exact open coefficient of a patch emitter proves a patch receiver
                 // dark; a cluster emitter's is sampled, and such a link stays (its light is
                 // estimated apart, see `eval::evaluate`).
@@ -484,6 +519,8 @@ fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
                 }
                 let split = if self_link {
                     Some(split_self(st, ws, recv))
+                } else if let Some(on_recv) = opening {
+                    Some(split_link(st, ws, recv, emit, on_recv))
                 } else if dark && !recv.is_patch() {
                     Some(split_link(st, ws, recv, emit, true))
                 } else {

@@ -31,7 +31,7 @@ pub(crate) fn rest_scale(st: &State, ws: &[u8], c: u32, beams: &[u32]) -> f32 {
     let mut count = 0;
     for k in 0..cluster.child_count {
         let e = st.child(ws, cluster.children + k);
-        if e.kind() == Kind::Cluster {
+        if matches!(e.kind(), Kind::Cluster | Kind::Instance) {
             continue;
         }
         if count == OWN {

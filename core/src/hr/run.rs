@@ -1,7 +1,7 @@
 //! The driver of a solve: start (count, lay out, load, light), refinement rounds, finish
 //! (final gather, balance, polygons to the sink).
 
-use super::census::{census, census_scratch_bytes};
+use super::census::{census_level, census_scratch_bytes};
 use super::error::{HrError, SolveError};
 use super::exec::{self, Executor, Progress};
 use super::layout::Layout;
@@ -81,9 +81,11 @@ pub(super) fn core_bvh<'w>(
 impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
     /// Counts, lays out and loads the scene, builds the core's BVH when no visibility is
     /// given, lights every patch, and evaluates the first links.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn start<S: SceneSource, P: Progress>(
         view: &SceneView<S>,
         settings: &Settings,
+        instancing: Instancing,
         workspace: &'w mut [u8],
         visibility: Option<&'w V>,
         executor: &'w mut E,
@@ -99,7 +101,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
                 needed: need as u64,
             });
         }
-        let c = census(view, settings.max_children, &mut ws[..need])?;
+        let c = census_level(view, settings.max_children, instancing, &mut ws[..need])?;
         if c.polygons() == 0 {
             return Err(HrError::Empty);
         }
@@ -120,13 +122,12 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             needed: plan.min_bytes,
         })?;
         let (ws, bvh_bytes, scratch) = parts(&lay, ws, plan.min_bytes)?;
-        let mut st =
-            load::load(view, settings, Instancing::None, &c, lay, ws).map_err(|e| match e {
-                HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
-                    needed: plan.min_bytes,
-                },
-                e => e,
-            })?;
+        let mut st = load::load(view, settings, instancing, &c, lay, ws).map_err(|e| match e {
+            HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
+                needed: plan.min_bytes,
+            },
+            e => e,
+        })?;
         let vis = match visibility {
             Some(v) => vis::Vis::External(v),
             None => vis::Vis::Internal(core_bvh(&st, ws, bvh_bytes)?),

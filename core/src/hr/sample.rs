@@ -36,6 +36,10 @@ pub(crate) fn point_in(s: &State, ws: &[u8], e: Elem, seed: u32) -> (Vec3, u32) 
                 cur = pick;
             }
             Kind::Source => return (Vec3::ZERO, crate::limits::NONE),
+            Kind::Instance => {
+                let p = super::instance_kernel::point_of(s, ws, cur.index(), hash3(h, cur.0, 0x1A));
+                return (p, crate::limits::NONE);
+            }
             _ => {
                 let p = s.patch(ws, cur);
                 let mut corners = [Vec3::ZERO; 4];
@@ -55,6 +59,8 @@ pub(crate) fn area(s: &State, ws: &[u8], e: Elem) -> f32 {
     match e.kind() {
         Kind::Cluster => s.cluster(ws, e.index()).area,
         Kind::Source => 0.0,
+        // Its equivalent surface (see `load::finish_clusters`).
+        Kind::Instance => 0.25 * s.instance(ws, e.index()).area_ref,
         _ => s.patch(ws, e).area,
     }
 }
@@ -90,6 +96,11 @@ pub(crate) fn point_toward(
             Kind::Cluster => {
                 let cc = s.cluster(ws, child.index());
                 let (lo, hi) = (Vec3::from(cc.bbox_min), Vec3::from(cc.bbox_max));
+                ((lo + hi) * 0.5, 0.5 * (hi - lo).length())
+            }
+            Kind::Instance => {
+                let c = s.instance(ws, child.index());
+                let (lo, hi) = (Vec3::from(c.bbox_min), Vec3::from(c.bbox_max));
                 ((lo + hi) * 0.5, 0.5 * (hi - lo).length())
             }
             _ => {
@@ -143,6 +154,10 @@ pub(crate) fn point_toward(
                 cur = child;
             }
             Kind::Source => return (Vec3::ZERO, crate::limits::NONE, 0.0),
+            Kind::Instance => {
+                let p = super::instance_kernel::point_of(s, ws, cur.index(), hash3(h, cur.0, 0x1B));
+                return (p, crate::limits::NONE, weight);
+            }
             _ => {
                 let p = s.patch(ws, cur);
                 let mut corners = [Vec3::ZERO; 4];

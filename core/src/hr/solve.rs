@@ -65,6 +65,15 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
         push(st, ws);
         let jumped = extrapolate > 0.0;
         let (change, b_max) = pull_parallel(st, ws, ex, extrapolate);
+        // Closed instances change with what they receive (see `instance_light`).
+        let (change, b_max) = if st.instances > 0 {
+            (
+                change.max(st.instance_change.0),
+                b_max.max(st.instance_change.1),
+            )
+        } else {
+            (change, b_max)
+        };
         extrapolate = 0.0;
         iterations = it + 1;
         st.stats.iterations += 1;
@@ -186,6 +195,9 @@ pub(crate) fn gather<E: Executor>(
 ) {
     super::oriented::link_fluxes(st, ws, ex, unit);
     super::oriented::distribute(st, ws, ex, select);
+    if st.instances > 0 && !unit {
+        st.instance_change = super::instance_light::gather_instances(st, ws);
+    }
     let first = st.clusters as usize;
     let n = st.receiver_count() as usize - first;
     let nb = st.bands;
@@ -502,6 +514,10 @@ fn pull_from(st: &State, ws: &mut [u8], extrapolate: f32, leaves_done: bool) -> 
                         *p += cc.area * v;
                     }
                 }
+            } else if child.kind() == Kind::Instance {
+                // Links never leave a cluster that holds closed instances (see
+                // `refine::must_open`): its radiosity is its polygons' alone.
+                continue;
             } else {
                 let poly = st.patch(ws, child).poly;
                 for side in 0..2 {
@@ -534,6 +550,14 @@ pub(crate) fn flow(st: &State, ws: &[u8]) -> f32 {
         for side in 0..2 {
             for (t, v) in total.iter_mut().zip(st.polygon_power(ws, i, side)) {
                 *t += *v as f64;
+            }
+        }
+    }
+    for i in 0..st.instances {
+        let placed = st.placed(ws, i);
+        if let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i)) {
+            for (b, t) in total.iter_mut().enumerate().take(nb) {
+                *t += r.scattered(b) as f64;
             }
         }
     }

@@ -55,9 +55,9 @@ pub(crate) struct State {
     /// there are `pending_links` of them.
     pub pending: (u32, u32),
     pub pending_links: u64,
-    /// Per kind of receiver (clusters, one-sided, two-sided patches), the index range that
-    /// may hold links no refinement pass has examined yet (see `refine`).
-    pub touched: [(u32, u32); 3],
+    /// Per kind of receiver (clusters, one-sided, two-sided patches, closed instances), the
+    /// index range that may hold links no refinement pass has examined yet (see `refine`).
+    pub touched: [(u32, u32); 4],
     /// Per patch pool, the patches below this index were checked for shadow edges in this
     /// round (see `refine`).
     pub shadow_checked: [u32; 2],
@@ -74,6 +74,9 @@ pub(crate) struct State {
     pub table_floats: usize,
     pub table_bytes: usize,
     pub received_floats: usize,
+    /// The last gather's largest change of a closed instance's mean radiosity and the
+    /// largest such radiosity (W/m^2; see `instance_light::gather_instances`).
+    pub instance_change: (f32, f32),
     /// The scene's box (m).
     pub scene_min: Vec3,
     pub scene_max: Vec3,
@@ -98,6 +101,14 @@ pub(crate) enum Shape {
     },
     Source {
         towards: Vec3,
+    },
+    /// A closed instance: its index, world box (m) and reference area (m^2, see
+    /// `instance_kernel`).
+    Instance {
+        index: u32,
+        min: Vec3,
+        max: Vec3,
+        area_ref: f32,
     },
 }
 
@@ -566,6 +577,15 @@ impl State {
                 let s: Source = read(ws, self.at(ws, e));
                 Shape::Source {
                     towards: s.towards.into(),
+                }
+            }
+            Kind::Instance => {
+                let c = self.instance(ws, e.index());
+                Shape::Instance {
+                    index: e.index(),
+                    min: c.bbox_min.into(),
+                    max: c.bbox_max.into(),
+                    area_ref: c.area_ref,
                 }
             }
             k => {

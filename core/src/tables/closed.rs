@@ -105,17 +105,17 @@ impl<'a> Placed<'a> {
                 .intensity(self.local(source), self.local(observer), band)
     }
 
-    /// True when the segment from `from` to `to` (world, m) crosses the placed box: a ray
-    /// along it is attenuated by `tau` of its direction.
-    pub fn crosses(&self, from: Vec3, to: Vec3) -> bool {
+    /// The part of the line through `from` and `to` (world, m) inside the placed box, as
+    /// parameters `(s0, s1)` (0 at `from`, 1 at `to`), or `None` when the line misses it.
+    fn chord(&self, from: Vec3, to: Vec3) -> Option<(f32, f32)> {
         let (lo, hi) = self.tables.bounds();
         let (a, b) = (self.local_point(from), self.local_point(to));
         let d = b - a;
-        let (mut t0, mut t1) = (0.0f32, 1.0f32);
+        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
         for k in 0..3 {
             if d[k] == 0.0 {
                 if a[k] < lo[k] || a[k] > hi[k] {
-                    return false;
+                    return None;
                 }
                 continue;
             }
@@ -125,11 +125,38 @@ impl<'a> Placed<'a> {
             }
             t0 = t0.max(ta);
             t1 = t1.min(tb);
-            if t0 > t1 {
-                return false;
-            }
         }
-        true
+        (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+    }
+
+    /// True when the segment from `from` to `to` (world, m) crosses the placed box.
+    pub fn crosses(&self, from: Vec3, to: Vec3) -> bool {
+        self.chord(from, to)
+            .is_some_and(|(s0, s1)| s0 <= 1.0 && s1 >= 0.0)
+    }
+
+    /// What the contents let through along the segment from `from` to `to` (world, m):
+    /// `tau` of its direction where it crosses the whole box; where it starts or ends inside,
+    /// `tau` to the power of the share of the box's chord it runs through (as light through
+    /// a uniform medium), so that a point deep inside a neighbour's box is not shaded by all
+    /// of it. 1 when it misses the box.
+    pub fn transmittance(&self, from: Vec3, to: Vec3) -> f32 {
+        let Some((s0, s1)) = self.chord(from, to) else {
+            return 1.0;
+        };
+        let (a, b) = (s0.max(0.0), s1.min(1.0));
+        if a > b {
+            return 1.0;
+        }
+        let t = self.tau((to - from).normalize_or_zero());
+        let share = if s1 > s0 { (b - a) / (s1 - s0) } else { 1.0 };
+        if share >= 1.0 {
+            t
+        } else if t <= 0.0 {
+            if share > 0.0 { 0.0 } else { 1.0 }
+        } else {
+            libm::powf(t, share)
+        }
     }
 
     /// Floats of storage the light received by this instance needs (see [`Received`]).

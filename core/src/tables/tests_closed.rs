@@ -391,3 +391,27 @@ fn tables_come_back_from_their_record() {
         Err(TableError::Value { index: 3 })
     ));
 }
+
+/// A segment through the whole box lets `tau` through; one that starts halfway along the
+/// chord, `tau^0.5`; one that misses, everything.
+#[test]
+fn a_segment_is_attenuated_by_the_share_of_the_chord_it_runs() {
+    let s = storage(4, 2, 2, 2, 1);
+    let t = tables(&s, (4, 2, 2, 2), 0);
+    // Box (-0.3, -0.2, 0) .. (0.4, 0.25, 1.2) in the original's frame.
+    for place in placements() {
+        let placed = Placed::new(t, place);
+        let w = |x: Vec3| place.point(x);
+        let d = Vec3::Z;
+        let tau = placed.tau(place.direction(d));
+        let through =
+            placed.transmittance(w(Vec3::new(0.1, 0.0, -1.0)), w(Vec3::new(0.1, 0.0, 3.0)));
+        assert!((through - tau).abs() < 1e-6, "{through} vs {tau}");
+        let half = placed.transmittance(w(Vec3::new(0.1, 0.0, 0.6)), w(Vec3::new(0.1, 0.0, 3.0)));
+        assert!((half - libm::powf(tau, 0.5)).abs() < 1e-4, "{half}");
+        let inside = placed.transmittance(w(Vec3::new(0.1, 0.0, 0.3)), w(Vec3::new(0.1, 0.0, 0.9)));
+        assert!((inside - libm::powf(tau, 0.5)).abs() < 1e-4, "{inside}");
+        let miss = placed.transmittance(w(Vec3::new(0.5, 0.0, -1.0)), w(Vec3::new(0.5, 0.0, 3.0)));
+        assert_eq!(miss, 1.0);
+    }
+}

@@ -1,0 +1,315 @@
+//! Links with a closed instance on one side (DESIGN.md "Instances inside a level").
+//!
+//! * **As an emitter** a closed instance sends the intensity its original's tables give for
+//!   the light it received, `I(o)` (W/sr) towards the unit direction `o`. Links keep the
+//!   isotropic kernel of a volume whose mean cross-section is a quarter of its reference
+//!   area `A` (`A = 4` x the mean cross-section `(1 - tau) A_box` over the sphere):
+//!   `A cos / (4 pi r^2 + A)`, and carry the radiosity `4 pi I(o) / A`
+//!   ([`carried_radiosity`]), so that a receiver far away gets `I(o) cos / r^2`.
+//! * **As a receiver** it takes the flux density on a plane facing the emitter at its
+//!   centre (W/m^2), which it keeps, with the direction it comes from, as a beam of its
+//!   received light (see `tables::closed`): what it intercepts is that times its
+//!   cross-section towards the emitter.
+//!
+//! Visibility is the mean transmittance of rays between points of the two elements, drawn
+//! in the instance's placed box; the instance itself does not block its own rays (its
+//! contents' shadows are in its tables), other closed instances do by their `tau`.
+
+use super::blockers::SKIP_INSTANCE;
+use super::cluster_kernel::{Plane, gathered};
+use super::eval::Coefficients;
+use super::ids::{Elem, Kind};
+use super::state::{Shape, State};
+use crate::formfactor::{facing_side, point_polygon};
+use crate::limits::NONE;
+use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
+use crate::visibility::Visibility;
+use core::f32::consts::PI;
+use glam::Vec3;
+
+/// A point of closed instance `i`'s placed box, from a hash.
+pub(crate) fn point_of(st: &State, ws: &[u8], i: u32, h: u32) -> Vec3 {
+    let placed = st.placed(ws, i);
+    let (lo, hi) = placed.tables().bounds();
+    let f = |x: u32| (x & 0x3FF) as f32 / 1024.0 + 0.5 / 1024.0;
+    let u = Vec3::new(f(h), f(h >> 10), f(h >> 20));
+    placed.place().point(lo + (hi - lo) * u)
+}
+
+/// The centre of closed instance `i`'s placed box (m).
+pub(crate) fn centre_of(st: &State, ws: &[u8], i: u32) -> Vec3 {
+    let placed = st.placed(ws, i);
+    let (lo, hi) = placed.tables().bounds();
+    placed.place().point((lo + hi) * 0.5)
+}
+
+/// The radiosity (W/m^2 per band) a link from closed instance `i` carries towards the
+/// point `towards`: `4 pi I(o) / A` (see the module documentation).
+pub(crate) fn carried_radiosity(st: &State, ws: &[u8], i: u32, towards: Vec3, out: &mut [f32]) {
+    out.fill(0.0);
+    let leaf = st.instance(ws, i);
+    if leaf.area_ref <= 0.0 {
+        return;
+    }
+    let o = (towards - centre_of(st, ws, i)).normalize_or_zero();
+    let placed = st.placed(ws, i);
+    let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i)) else {
+        return;
+    };
+    let s = 4.0 * PI / leaf.area_ref;
+    for (band, o_b) in out.iter_mut().enumerate() {
+        *o_b = s * r.intensity(&placed, o, band);
+    }
+}
+
+/// The radiosity closed instance `i`'s links carry on average (W/m^2, the largest band):
+/// the power it scatters out over its reference area.
+pub(crate) fn mean_radiosity(st: &State, ws: &[u8], i: u32) -> f32 {
+    let leaf = st.instance(ws, i);
+    if leaf.area_ref <= 0.0 {
+        return 0.0;
+    }
+    let placed = st.placed(ws, i);
+    let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i)) else {
+        return 0.0;
+    };
+    (0..st.bands).map(|b| r.scattered(b)).fold(0.0f32, f32::max) / leaf.area_ref
+}
+
+/// The isotropic kernel of an instance of reference area `a` seen at distance squared `r2`
+/// under cosine `cos` (clamped so that it never exceeds 1).
+fn kernel(a: f32, r2: f32, cos: f32) -> f32 {
+    if cos <= 0.0 || a <= 0.0 {
+        return 0.0;
+    }
+    a * cos / (4.0 * PI * r2 + a)
+}
+
+/// Mean transmittance of `rays` rays from `x` to points drawn by `target(j)`.
+fn visible<V: Visibility + ?Sized>(
+    vis: &V,
+    x: Vec3,
+    rays: u32,
+    skip: [u32; 2],
+    mut target: impl FnMut(u32) -> Vec3,
+) -> f32 {
+    let n = rays.max(1);
+    let mut seen = 0.0f32;
+    for j in 0..n {
+        seen += vis.transmittance(x, target(j), skip);
+    }
+    seen / n as f32
+}
+
+/// The coefficients of link `recv <- emit` where either is a closed instance, from `seed`
+/// with `rays` rays per point.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn evaluate<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    emit: Elem,
+    vis: &V,
+    seed: u32,
+    rays: u32,
+) -> Coefficients {
+    let mut out = Coefficients {
+        witness: [NONE; 2],
+        ..Coefficients::default()
+    };
+    match (recv.kind(), emit.kind()) {
+        (_, Kind::Instance) => from_instance(st, ws, recv, emit.index(), vis, seed, rays, &mut out),
+        (Kind::Instance, _) => into_instance(st, ws, recv.index(), emit, vis, seed, rays, &mut out),
+        _ => {}
+    }
+    out.seen = out.k.iter().flatten().sum();
+    out
+}
+
+/// A patch, a cluster or another instance receiving from closed instance `i`.
+#[allow(clippy::too_many_arguments)]
+fn from_instance<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    i: u32,
+    vis: &V,
+    seed: u32,
+    rays: u32,
+    out: &mut Coefficients,
+) {
+    let a = st.instance(ws, i).area_ref;
+    let c = centre_of(st, ws, i);
+    let to_emitter = |j: u32| point_of(st, ws, i, hash3(seed, j, 0x1E));
+    match st.shape(ws, recv) {
+        Shape::Patch {
+            corners,
+            n,
+            normal,
+            poly,
+            two_sided,
+            ..
+        } => {
+            let (mut pts, mut wts) = ([Vec3::ZERO; MAX_QUADRATURE], [0.0f32; MAX_QUADRATURE]);
+            let m = super::eval::exposed_quadrature(
+                &st.patch(ws, recv),
+                &corners[..n],
+                &mut pts,
+                &mut wts,
+            );
+            let mut plain = [0.0f32; MAX_QUADRATURE];
+            quadrature(&corners[..n], &mut [Vec3::ZERO; MAX_QUADRATURE], &mut plain);
+            let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+            for q in 0..m {
+                let x = pts[q];
+                let d = c - x;
+                let r2 = d.length_squared();
+                let w = d.normalize_or_zero();
+                for side in 0..if two_sided { 2 } else { 1 } {
+                    let nr = if side == 0 { normal } else { -normal };
+                    let open = kernel(a, r2, nr.dot(w));
+                    if open <= 0.0 {
+                        continue;
+                    }
+                    out.open += plain[q] * open;
+                    if wts[q] == 0.0 {
+                        out.partial = true;
+                        continue;
+                    }
+                    let v = visible(vis, x, rays, [poly, SKIP_INSTANCE | i], |j| {
+                        to_emitter(hash3(q as u32, side as u32, j))
+                    });
+                    out.rays += rays.max(1);
+                    out.partial |= v < 1.0;
+                    out.k[side][0] += wts[q] * open * v;
+                    lo = lo.min(open * v);
+                    hi = hi.max(open * v);
+                }
+            }
+            if hi > 0.0 {
+                out.spread = hi - lo.min(hi);
+            }
+        }
+        Shape::Cluster { .. } => {
+            // The flux density on a plane facing the instance, at points of the cluster's
+            // surfaces.
+            let n = rays.max(4);
+            let mut sum = 0.0f32;
+            let mut open = 0.0f32;
+            for j in 0..n {
+                let (x, poly) = super::sample::point_in(st, ws, recv, hash3(seed, j, 0xC7));
+                let d = c - x;
+                let k = kernel(a, d.length_squared(), 1.0);
+                open += k;
+                let y = to_emitter(j);
+                sum += k * vis.transmittance(x, y, [poly, SKIP_INSTANCE | i]);
+            }
+            out.rays += n;
+            out.k[0][0] = sum / n as f32;
+            out.open = open / n as f32;
+            out.partial = out.k[0][0] < out.open;
+            out.dir = (c - super::oriented::centre(st, ws, recv)).normalize_or_zero();
+        }
+        Shape::Instance { index: r, .. } => {
+            // Flux density at the receiver's centre, facing the emitter; rays between points
+            // of both boxes.
+            let x = centre_of(st, ws, r);
+            let d = c - x;
+            let open = kernel(a, d.length_squared(), 1.0);
+            let n = rays.max(1);
+            let mut seen = 0.0f32;
+            for j in 0..n {
+                let from = point_of(st, ws, r, hash3(seed, j, 0x2F));
+                let skip = [SKIP_INSTANCE | r, SKIP_INSTANCE | i];
+                seen += vis.transmittance(from, to_emitter(j), skip);
+            }
+            let v = seen / n as f32;
+            out.rays += n;
+            out.open = open;
+            out.k[0][0] = open * v;
+            out.partial = v < 1.0;
+            out.dir = d.normalize_or_zero();
+        }
+        Shape::Source { .. } => {}
+    }
+}
+
+/// Closed instance `i` receiving from a patch or a cluster (instances are `from_instance`).
+#[allow(clippy::too_many_arguments)]
+fn into_instance<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    i: u32,
+    emit: Elem,
+    vis: &V,
+    seed: u32,
+    rays: u32,
+    out: &mut Coefficients,
+) {
+    let c = centre_of(st, ws, i);
+    let from = |j: u32| point_of(st, ws, i, hash3(seed, j, 0x3E));
+    match st.shape(ws, emit) {
+        Shape::Patch {
+            corners,
+            n,
+            normal,
+            poly,
+            two_sided,
+            ..
+        } => {
+            let corners = &corners[..n];
+            let Some(s) = facing_side(c, corners[0], normal) else {
+                return;
+            };
+            if s == 1 && !two_sided {
+                return;
+            }
+            let mut centre = Vec3::ZERO;
+            for &p in corners {
+                centre += p;
+            }
+            let w = (centre / n as f32 - c).normalize_or_zero();
+            // Irradiance on a plane at the centre facing the patch, per unit radiosity.
+            let f = point_polygon(c, w, corners);
+            if f <= 0.0 {
+                return;
+            }
+            let m = rays.max(1);
+            let mut seen = 0.0f32;
+            for j in 0..m {
+                let (u, v) = unit2(hash3(seed, j, 0x3F));
+                seen +=
+                    vis.transmittance(from(j), point_on(corners, u, v), [SKIP_INSTANCE | i, poly]);
+            }
+            let v = seen / m as f32;
+            out.rays += m;
+            out.open = f;
+            out.k[0][s] = f * v;
+            out.partial = v < 1.0;
+            out.dir = w;
+        }
+        Shape::Cluster { min, max, .. } => {
+            let w = ((min + max) * 0.5 - c).normalize_or_zero();
+            let (k, _, open, wit) = gathered(
+                st,
+                ws,
+                emit,
+                c,
+                Plane::Facing(w),
+                SKIP_INSTANCE | i,
+                hash3(seed, 0x4E, 1),
+                rays.max(4),
+                true,
+                vis,
+            );
+            out.rays += rays.max(4);
+            out.open = open;
+            out.k[0][0] = k;
+            out.partial = k < open;
+            out.exact = true;
+            out.witness = wit.pick;
+            out.dir = w;
+        }
+        Shape::Instance { .. } | Shape::Source { .. } => {}
+    }
+}

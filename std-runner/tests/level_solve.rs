@@ -1,0 +1,253 @@
+//! The top level solved with its instances closed (issue 18, under construction) against
+//! the same scene expanded: what each plant absorbs, what the soil receives, and the power
+//! balance.
+
+use glam::{Quat, Vec3};
+use hirad::generate::palette::{diffuse, two_sided};
+use hirad::generate::shapes::{add_quad, frame};
+use hirad::scene::{Cluster, InstanceOf, Original, Scene, Similarity, compile};
+use hirad::solve::RayonExecutor;
+use hirad::tables::{TableSettings, bake_original};
+use hirad_core::hr::level_probe::solve_level;
+use hirad_core::hr::{Instancing, Settings};
+use hirad_core::image::{LightData, SceneView, SliceSource};
+use hirad_core::sink::{PolygonResult, Sink};
+use hirad_core::tables::bake::TauSettings;
+use hirad_core::tables::closed::Received;
+
+const RHO: [f32; 2] = [0.08, 0.45];
+const RHO_BACK: [f32; 2] = [0.1, 0.4];
+const TAU: [f32; 2] = [0.05, 0.4];
+const SOIL: [f32; 2] = [0.1, 0.25];
+
+/// A small plant: `leaves` square leaves of side 0.12 m around a vertical axis, rising and
+/// turning.
+fn plant(leaves: u32, m: u32) -> Cluster {
+    let mut c = Cluster::named("plant");
+    for k in 0..leaves {
+        let a = k as f32 * 2.4;
+        let centre = Vec3::new(0.08 * a.cos(), 0.08 * a.sin(), 0.05 + 0.06 * k as f32);
+        let n = Vec3::new(0.6 * a.cos(), 0.6 * a.sin(), 0.8).normalize();
+        let (u, v) = frame(n);
+        let h = 0.06;
+        add_quad(
+            &mut c,
+            [
+                centre - u * h - v * h,
+                centre + u * h - v * h,
+                centre + u * h + v * h,
+                centre - u * h + v * h,
+            ],
+            m,
+        );
+    }
+    c
+}
+
+/// Soil of side `size` under a grid of `nx x ny` plants `spacing` apart, each turned.
+fn field(nx: u32, ny: u32, spacing: f32, size: f32) -> Scene {
+    let mut s = Scene::new(2);
+    let soil = diffuse(&mut s, "soil", &SOIL);
+    let leaf = two_sided(&mut s, "leaf", &RHO, &RHO_BACK, &TAU);
+    s.originals.push(Original {
+        name: "plant".into(),
+        root: plant(7, leaf),
+    });
+    let h = 0.5 * size;
+    debug_assert_eq!(s.materials.len(), 2);
+    add_quad(
+        &mut s.root,
+        [
+            Vec3::new(-h, -h, 0.0),
+            Vec3::new(h, -h, 0.0),
+            Vec3::new(h, h, 0.0),
+            Vec3::new(-h, h, 0.0),
+        ],
+        soil,
+    );
+    for i in 0..nx {
+        for j in 0..ny {
+            let at = Vec3::new(
+                (i as f32 - 0.5 * (nx - 1) as f32) * spacing,
+                (j as f32 - 0.5 * (ny - 1) as f32) * spacing,
+                0.0,
+            );
+            s.root.children.push(Cluster {
+                instance: Some(InstanceOf {
+                    original: 0,
+                    exact: true,
+                    transform: Similarity {
+                        rotation: Quat::from_rotation_z(1.3 * (i * ny + j) as f32),
+                        translation: at,
+                        scale: 1.0,
+                    },
+                }),
+                ..Cluster::default()
+            });
+        }
+    }
+    s.suns.push(LightData {
+        towards: Vec3::new(0.4, 0.3, 0.85).normalize(),
+        irradiance: [400.0, 350.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    });
+    s
+}
+
+/// Polygons' absorbed power, in global-id order.
+#[derive(Default)]
+struct Absorbed {
+    power: Vec<[f64; 2]>,
+}
+
+impl Sink for Absorbed {
+    type Error = std::convert::Infallible;
+    fn polygon(&mut self, p: &PolygonResult<'_>) -> Result<(), Self::Error> {
+        let id = p.id as usize;
+        let (rf, rb, t) = if id == 0 {
+            (SOIL, [0.0; 2], [0.0; 2])
+        } else {
+            (RHO, RHO_BACK, TAU)
+        };
+        let mut a = [0.0f64; 2];
+        for b in 0..2 {
+            a[b] += (p.area * p.irradiance[0][b] * (1.0 - rf[b] - t[b])) as f64;
+            if p.two_sided {
+                a[b] += (p.area * p.irradiance[1][b] * (1.0 - rb[b] - t[b])) as f64;
+            }
+        }
+        self.power.push(a);
+        Ok(())
+    }
+}
+
+fn tables_settings() -> TableSettings {
+    TableSettings {
+        tau: TauSettings {
+            rays: 64,
+            target: 0.02,
+            checks: 16,
+            seed: 1,
+        },
+        tau_check_rays: 128,
+        max_tau_side: 32,
+        max_side: 8,
+        first_out_side: 8,
+        max_out_side: 8,
+        first_single_side: 32,
+        max_single_side: 64,
+        checks: 4,
+        out_checks: 4,
+        ..TableSettings::default()
+    }
+}
+
+/// What each plant absorbs and what the soil absorbs, per band (W), and the stats: the
+/// scene expanded, then its top level with the plants closed.
+type Outcome = (Vec<[f64; 2]>, [f64; 2], hirad_core::hr::Stats);
+
+fn solve_both(s: &Scene, exec: &mut RayonExecutor) -> (Outcome, Outcome) {
+    let bytes = compile(s).unwrap();
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    let settings = Settings {
+        epsilon: 2e-4,
+        ..Settings::default()
+    };
+    let mut ws = vec![0u8; 256 << 20];
+    let mut expanded = Absorbed::default();
+    let full = solve_level(
+        &view,
+        &settings,
+        Instancing::None,
+        &mut ws,
+        exec,
+        &mut expanded,
+        |_| {},
+    )
+    .unwrap();
+    let per_plant = 7;
+    let plants = (expanded.power.len() - 1) / per_plant;
+    let mut want = vec![[0.0f64; 2]; plants];
+    for (k, p) in expanded.power[1..].iter().enumerate() {
+        for b in 0..2 {
+            want[k / per_plant][b] += p[b];
+        }
+    }
+    let mut level = Absorbed::default();
+    let mut got = vec![[0.0f64; 2]; plants];
+    let top = solve_level(
+        &view,
+        &settings,
+        Instancing::Top,
+        &mut ws,
+        exec,
+        &mut level,
+        |l| {
+            // By node: the scene's order, as the expanded plants'.
+            let mut by_node: Vec<u32> = (0..l.instances()).collect();
+            by_node.sort_by_key(|&i| l.instance(i).node);
+            for (k, &i) in by_node.iter().enumerate() {
+                let c = l.instance(i);
+                let r = Received::over(&c.placed, c.received).unwrap();
+                got[k] = [r.absorbed(0) as f64, r.absorbed(1) as f64];
+            }
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        level.power.len(),
+        1,
+        "the level's own polygon only: the soil"
+    );
+    ((want, expanded.power[0], full), (got, level.power[0], top))
+}
+
+/// Plants apart from each other (boxes that do not overlap), under suns high and low: what
+/// each closed plant absorbs is within 6% of what its expanded leaves absorb, the soil
+/// within 1.5%, and the level's light balances within 1%.
+#[test]
+fn closed_plants_absorb_what_expanded_plants_do() {
+    let mut exec = RayonExecutor::new(2).unwrap();
+    let base = field(1, 1, 1.0, 3.0);
+    let t = bake_original(&base, 0, &tables_settings(), &mut exec, &mut |_, _, _| {}).unwrap();
+    let tables = t.to_scene();
+    let mut worst = 0.0f64;
+    for (nx, ny, spacing) in [(1u32, 1u32, 1.0f32), (2, 2, 0.6), (3, 1, 0.7)] {
+        for sun in [Vec3::new(0.4, 0.3, 0.85), Vec3::new(-0.6, 0.25, 0.5)] {
+            let mut s = field(nx, ny, spacing, 3.0);
+            s.suns[0].towards = sun.normalize();
+            s.tables = vec![tables.clone()];
+            let ((want, soil_want, full), (got, soil_got, top)) = solve_both(&s, &mut exec);
+            let case = format!("{nx} x {ny} plants {spacing} m apart, sun {sun}");
+            assert_eq!(got.len(), (nx * ny) as usize, "{case}");
+            for b in 0..2 {
+                for (k, (w, g)) in want.iter().zip(got.iter()).enumerate() {
+                    let e = g[b] / w[b] - 1.0;
+                    worst = worst.max(e.abs());
+                    assert!(
+                        e.abs() <= 0.06,
+                        "{case}: plant {k} band {b}: {} vs {}",
+                        g[b],
+                        w[b]
+                    );
+                }
+                let e = soil_got[b] / soil_want[b] - 1.0;
+                assert!(
+                    e.abs() <= 0.015,
+                    "{case}: soil band {b}: {} vs {}",
+                    soil_got[b],
+                    soil_want[b]
+                );
+                assert!(full.balance.relative_imbalance(b).abs() <= 0.01, "{case}");
+                assert!(
+                    top.balance.relative_imbalance(b).abs() <= 0.01,
+                    "{case}: closed imbalance {}",
+                    top.balance.relative_imbalance(b)
+                );
+                // What the suns bring is the same light, however it is taken in.
+                let d = top.balance.direct[b] / full.balance.direct[b] - 1.0;
+                assert!(d.abs() <= 0.01, "{case}: direct {d}");
+            }
+        }
+    }
+    println!("worst plant error {:.2}%", 100.0 * worst);
+}
