@@ -40,6 +40,7 @@ pub fn start<S: SceneSource, V: Visibility + ?Sized, E: Executor>(
         view,
         settings,
         Instancing::None,
+        &super::level::LevelRoot::scene(view),
         workspace,
         Some(vis),
         executor,

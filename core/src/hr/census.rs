@@ -125,6 +125,24 @@ pub fn census_level<S: SceneSource>(
     instancing: Instancing,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
+    census_at(
+        view,
+        max_children,
+        instancing,
+        view.info().scene_root.0,
+        scratch,
+    )
+}
+
+/// [`census_level`] of the level whose root is node `root` (the scene's root, an opened
+/// instance's original's root, or an opened approximate instance).
+pub(crate) fn census_at<S: SceneSource>(
+    view: &SceneView<S>,
+    max_children: u32,
+    instancing: Instancing,
+    root: u32,
+    scratch: &mut [u8],
+) -> Result<Census, HrError> {
     let info = *view.info();
     let memo_bytes = info.originals as usize * core::mem::size_of::<Census>();
     if scratch.len() < census_scratch_bytes(view) {
@@ -152,16 +170,9 @@ pub fn census_level<S: SceneSource>(
             let root = view.original(OriginalId(k))?.root;
             memo[k as usize] = tree(view, root, max_children, two_sided, memo, None)?;
         }
-        return tree(view, info.scene_root.0, max_children, two_sided, memo, None);
+        return tree(view, root, max_children, two_sided, memo, None);
     }
-    let mut c = tree(
-        view,
-        info.scene_root.0,
-        max_children,
-        two_sided,
-        memo,
-        Some(closed),
-    )?;
+    let mut c = tree(view, root, max_children, two_sided, memo, Some(closed))?;
     // The tables of every original with closed instances, each once.
     for k in 0..info.originals {
         if closed[k as usize / 8] & (1 << (k % 8)) == 0 {
@@ -181,6 +192,31 @@ pub fn census_level<S: SceneSource>(
             .ok_or(HrError::SceneTooLarge)?;
     }
     Ok(c)
+}
+
+/// Every original's expanded census, into `memo` (one per original, in order).
+pub(crate) fn expanded_originals<S: SceneSource>(
+    view: &SceneView<S>,
+    memo: &mut [Census],
+) -> Result<(), HrError> {
+    for k in 0..view.info().originals {
+        let root = view.original(OriginalId(k))?.root;
+        let c = tree(view, root, 2, &[], memo, None)?;
+        if let Some(m) = memo.get_mut(k as usize) {
+            *m = c;
+        }
+    }
+    Ok(())
+}
+
+/// Input polygons in the expansion of node `node`'s subtree (an exact instance: its
+/// original's), from the originals' expanded census `memo`.
+pub(crate) fn subtree_polygons<S: SceneSource>(
+    view: &SceneView<S>,
+    node: u32,
+    memo: &[Census],
+) -> Result<u64, HrError> {
+    Ok(tree(view, node, 2, &[], memo, None)?.polygons())
 }
 
 /// A closed instance of `original`: one instance, the floats of the light it receives,

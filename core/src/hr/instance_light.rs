@@ -105,6 +105,8 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
                 for (slot, p) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(pairs)).enumerate() {
                     let (i, k) = ((p / sources) as u32, (p % sources) as u32);
                     let (t, rays) = (buf[2 * slot], buf[2 * slot + 1] as u64);
+                    let at = c.st.lay.instance_sources + 4 * p;
+                    super::pool::write(c.ws, at, &t);
                     c.st.stats.rays += rays;
                     c.st.stats.rays_by_phase.lighting += rays;
                     let src = Elem::new(Kind::Source, k);
@@ -129,6 +131,12 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
         );
     }
     start_from_direct(st, ws);
+}
+
+/// The mean transmittance from closed instance `i`'s box towards source `k` (as lit).
+pub(crate) fn seen_fraction(st: &State, ws: &[u8], i: u32, k: u32) -> f32 {
+    let p = i as usize * st.sources as usize + k as usize;
+    super::pool::read(ws, st.lay.instance_sources + 4 * p)
 }
 
 /// Sets every closed instance's whole light to its direct light (before links add theirs).
@@ -170,7 +178,7 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
 /// The flux density (W/m^2 per band, on a plane facing the emitter) that link `i` brings a
 /// closed instance centred at `at`: its coefficients times its emitter's radiosity, as a
 /// patch's front gathers it.
-fn link_flux(st: &State, ws: &[u8], i: u32, at: Vec3, kk: usize, out: &mut [f32]) {
+pub(crate) fn link_flux(st: &State, ws: &[u8], i: u32, at: Vec3, kk: usize, out: &mut [f32]) {
     let l = st.link(ws, i);
     let k = st.link_k(ws, i);
     let emit = Elem(l.emit);

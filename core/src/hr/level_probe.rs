@@ -146,7 +146,8 @@ pub fn load_level<S: SceneSource>(
     )
     .ok_or(HrError::WorkspaceTooSmall { needed: 0 })?;
     let (ws, bvh_bytes, scratch) = super::run::parts(&lay, ws, 0)?;
-    let mut st = super::load::load(view, settings, instancing, &c, lay, ws)?;
+    let level = super::level::LevelRoot::scene(view);
+    let mut st = super::load::load(view, settings, instancing, &level, &c, lay, ws)?;
     let vis: super::vis::Vis<'_, crate::visibility::Unoccluded> =
         super::vis::Vis::Internal(super::run::core_bvh(&st, ws, bvh_bytes)?);
     let mut ex = super::exec::Sequential;
@@ -233,6 +234,7 @@ where
         view,
         settings,
         instancing,
+        &super::level::LevelRoot::scene(view),
         workspace,
         None,
         executor,

@@ -48,10 +48,12 @@ struct Item {
 
 const _: () = assert!(core::mem::size_of::<Item>() == GROUP_ITEM_BYTES);
 
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn load<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     instancing: Instancing,
+    level: &super::level::LevelRoot<'_>,
     census: &Census,
     lay: Layout,
     ws: &mut [u8],
@@ -80,8 +82,8 @@ pub(crate) fn load<S: SceneSource>(
         polygons: 0,
         child_entries: 0,
         power: 0.0,
-        suns: info.suns,
-        sources: info.suns + info.sky,
+        suns: level.suns(view),
+        sources: level.sources(view),
         typical_area: 0.0,
         min_area: 0.0,
         far: 0.0,
@@ -137,14 +139,23 @@ pub(crate) fn load<S: SceneSource>(
     if albedo < 1.0 {
         s.contraction = albedo;
     }
-    // Sources: suns, then sky directions.
-    for (k, light) in (0..info.suns)
-        .map(|i| view.sun(LightId(i)))
-        .chain((0..info.sky).map(|i| view.sky(LightId(i))))
-        .enumerate()
-    {
-        let l = light?;
-        let e = Elem::new(Kind::Source, k as u32);
+    // Sources: suns, then sky directions (or the beams of an opened instance).
+    let beam = super::level::beam_floats(bands);
+    for k in 0..s.sources {
+        let l = match level.beams {
+            None if k < info.suns => view.sun(LightId(k))?,
+            None => view.sky(LightId(k - info.suns))?,
+            Some((b, _)) => {
+                let v = &b[k as usize * beam..(k as usize + 1) * beam];
+                let mut irradiance = [0.0f32; MAX_BANDS];
+                irradiance[..bands].copy_from_slice(&v[3..]);
+                crate::image::LightData {
+                    towards: Vec3::new(v[0], v[1], v[2]),
+                    irradiance,
+                }
+            }
+        };
+        let e = Elem::new(Kind::Source, k);
         let at = s.at(ws, e);
         write(
             ws,
@@ -161,11 +172,12 @@ pub(crate) fn load<S: SceneSource>(
             write(ws, lay.slot_map + 4 * k, &NONE);
         }
     }
-    load_tree(view, &mut s, ws)?;
+    load_tree(view, &mut s, ws, level)?;
     finish_clusters(&mut s, ws);
     cluster_order(&mut s, ws);
     super::blockers::build(&s, ws)?;
-    totals(&mut s, ws, info.suns + info.sky);
+    let n_sources = s.sources;
+    totals(&mut s, ws, n_sources);
     if s.power.is_nan() || s.power <= 0.0 {
         return Err(HrError::NoLight);
     }
@@ -229,12 +241,12 @@ fn load_tree<S: SceneSource>(
     view: &SceneView<S>,
     s: &mut State,
     ws: &mut [u8],
+    level: &super::level::LevelRoot<'_>,
 ) -> Result<(), HrError> {
     let lay = s.lay;
     let root = new_cluster(s, ws, NONE)?;
     let mut depth = 0usize;
-    let scene = view.info().scene_root.0;
-    open_node(view, s, ws, scene, root, Similarity::IDENTITY, depth)?;
+    open_node(view, s, ws, level.node, root, level.place, depth)?;
     loop {
         let at = frame_at(&lay, depth);
         let mut f: Frame = read(ws, at);

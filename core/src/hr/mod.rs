@@ -35,7 +35,9 @@ mod ids;
 mod instance_kernel;
 mod instance_light;
 mod layout;
+mod level;
 mod load;
+mod open;
 mod oriented;
 mod output;
 mod pending;
@@ -57,6 +59,7 @@ pub use balance::Balance;
 pub use census::{Census, census, census_level, census_scratch_bytes, grouping_clusters};
 pub use error::{HrError, SolveError};
 pub use exec::{Executor, NoProgress, Progress, Sequential};
+pub use open::solve_hi;
 pub use plan::{Plan, plan};
 pub use settings::{Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats};
 
@@ -90,6 +93,7 @@ where
         view,
         settings,
         Instancing::None,
+        &level::LevelRoot::scene(view),
         workspace,
         visibility,
         executor,

@@ -55,6 +55,24 @@ pub(crate) fn emit<K: Sink, V: Visibility + ?Sized, E: Executor>(
     progress: &mut dyn Progress,
     sink: &mut K,
 ) -> Result<Written, K::Error> {
+    emit_range(st, ws, vis, ex, progress, sink, 0, st.polygons, 0)
+}
+
+/// [`emit`] for the `count` polygons from `first` on, each handed over with its index plus
+/// `id_offset` as its global id (a level of hierarchical instantiation: its polygons'
+/// global ids leave room for its instances' contents).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
+    st: &State,
+    ws: &[u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+    sink: &mut K,
+    first: u32,
+    count: u32,
+    id_offset: u64,
+) -> Result<Written, K::Error> {
     let nb = st.bands;
     let rays = rays_per_side(st, ws);
     let mut ctx = Ctx {
@@ -65,7 +83,8 @@ pub(crate) fn emit<K: Sink, V: Visibility + ?Sized, E: Executor>(
         rays,
     };
     let per = 2 * nb + 1;
-    let n = st.polygons as usize;
+    let n = count.min(st.polygons.saturating_sub(first)) as usize;
+    let first = first as usize;
     let mut failed: Option<K::Error> = None;
     let mut absorbed = [0.0f64; MAX_BANDS];
     let mut cast = 0u64;
@@ -85,6 +104,7 @@ pub(crate) fn emit<K: Sink, V: Visibility + ?Sized, E: Executor>(
             };
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
                 let o = &mut buf[slot * per..(slot + 1) * per];
+                let i = first + i;
                 let r = gather_polygon(c.st, c.ws, &ray, i as u32, c.rays, &c.em, &mut o[1..]);
                 o[0] = r as f32;
             }
@@ -97,7 +117,8 @@ pub(crate) fn emit<K: Sink, V: Visibility + ?Sized, E: Executor>(
                 let o = &buf[slot * per..(slot + 1) * per];
                 let gathered = (c.rays > 0).then(|| &o[1..]);
                 cast += o[0] as u64;
-                if let Err(e) = polygon(c.st, c.ws, i as u32, gathered, sink, &mut absorbed) {
+                let i = (first + i) as u32;
+                if let Err(e) = polygon(c.st, c.ws, i, id_offset, gathered, sink, &mut absorbed) {
                     failed = Some(e);
                 }
             }
@@ -126,6 +147,7 @@ fn polygon<K: Sink>(
     st: &State,
     ws: &[u8],
     i: u32,
+    id_offset: u64,
     gathered: Option<&[f32]>,
     sink: &mut K,
     absorbed: &mut [f64; MAX_BANDS],
@@ -151,7 +173,7 @@ fn polygon<K: Sink>(
             &[]
         };
         sink.patch(&PatchResult {
-            id: i as u64,
+            id: i as u64 + id_offset,
             corners: &corners[..p.corner_count()],
             normal,
             material: poly.material,
@@ -208,7 +230,7 @@ fn polygon<K: Sink>(
     }
     let back = if sides == 2 { nb } else { 0 };
     sink.polygon(&PolygonResult {
-        id: i as u64,
+        id: i as u64 + id_offset,
         area: st.patch(ws, root).area,
         two_sided: sides == 2,
         radiosity: [&b[0][..nb], &b[1][..back]],

@@ -48,11 +48,32 @@ pub(super) fn sources<S: SceneSource>(view: &SceneView<S>) -> u32 {
     view.info().suns + view.info().sky
 }
 
+/// [`plan_from`] for a level lit by `sources` directional sources.
+pub(super) fn plan_level<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    internal: bool,
+    c: &Census,
+    sources: u32,
+) -> Result<Plan, HrError> {
+    plan_with(view, settings, internal, c, sources)
+}
+
 pub(super) fn plan_from<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     internal: bool,
     c: &Census,
+) -> Result<Plan, HrError> {
+    plan_with(view, settings, internal, c, sources(view))
+}
+
+fn plan_with<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    internal: bool,
+    c: &Census,
+    n_sources: u32,
 ) -> Result<Plan, HrError> {
     let info = view.info();
     let bands = info.bands as usize;
@@ -60,7 +81,7 @@ pub(super) fn plan_from<S: SceneSource>(
         c,
         info.materials,
         info.originals,
-        sources(view),
+        n_sources,
         bands,
         settings,
         internal,
@@ -73,7 +94,7 @@ pub(super) fn plan_from<S: SceneSource>(
             c,
             info.materials,
             info.originals,
-            sources(view),
+            n_sources,
             bands,
             settings,
             internal,
@@ -89,7 +110,7 @@ pub(super) fn plan_from<S: SceneSource>(
                 n.div_ceil(per(stride).max(1))
             }
         };
-        let links = 2 + sources(view) as u64 + 64;
+        let links = 2 + n_sources as u64 + 64;
         let total = blocks(c.polys_one_sided, st.patch1)
             + blocks(c.polys_two_sided, st.patch2)
             + blocks(links, st.link);
@@ -136,7 +157,7 @@ pub(super) fn plan_from<S: SceneSource>(
         c,
         info.materials,
         info.originals,
-        sources(view),
+        n_sources,
         bands,
         settings,
         internal,

@@ -1,11 +1,12 @@
 //! The driver of a solve: start (count, lay out, load, light), refinement rounds, finish
 //! (final gather, balance, polygons to the sink).
 
-use super::census::{census_level, census_scratch_bytes};
+use super::census::{census_at, census_scratch_bytes};
 use super::error::{HrError, SolveError};
 use super::exec::{self, Executor, Progress};
 use super::layout::Layout;
-use super::plan::{aligned, plan_from, sources};
+use super::level::LevelRoot;
+use super::plan::{aligned, plan_level};
 use super::settings::{Instancing, Settings, Stats};
 use super::{
     balance, bins, closure, direct, gather_rays, instance_light, load, output, pending, refine,
@@ -86,6 +87,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         view: &SceneView<S>,
         settings: &Settings,
         instancing: Instancing,
+        level: &LevelRoot<'_>,
         workspace: &'w mut [u8],
         visibility: Option<&'w V>,
         executor: &'w mut E,
@@ -101,18 +103,25 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
                 needed: need as u64,
             });
         }
-        let c = census_level(view, settings.max_children, instancing, &mut ws[..need])?;
+        let c = census_at(
+            view,
+            settings.max_children,
+            instancing,
+            level.node,
+            &mut ws[..need],
+        )?;
         if c.polygons() == 0 {
             return Err(HrError::Empty);
         }
         let internal = visibility.is_none();
-        let plan = plan_from(view, settings, internal, &c)?;
+        let n_sources = level.sources(view);
+        let plan = plan_level(view, settings, internal, &c, n_sources)?;
         let info = view.info();
         let lay = Layout::new(
             &c,
             info.materials,
             info.originals,
-            sources(view),
+            n_sources,
             info.bands as usize,
             settings,
             internal,
@@ -122,7 +131,8 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             needed: plan.min_bytes,
         })?;
         let (ws, bvh_bytes, scratch) = parts(&lay, ws, plan.min_bytes)?;
-        let mut st = load::load(view, settings, instancing, &c, lay, ws).map_err(|e| match e {
+        let loaded = load::load(view, settings, instancing, level, &c, lay, ws);
+        let mut st = loaded.map_err(|e| match e {
             HrError::WorkspaceTooSmall { .. } => HrError::WorkspaceTooSmall {
                 needed: plan.min_bytes,
             },

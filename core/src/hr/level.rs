@@ -1,0 +1,51 @@
+//! Where a level starts and what lights it: the scene's root under the scene's suns and sky,
+//! or an opened instance's contents, placed, under the light that reached the instance
+//! (see `open`).
+
+use crate::geometry::Similarity;
+use crate::image::{SceneSource, SceneView};
+
+/// Floats of one beam for `bands` bands: the unit direction towards its source, then its
+/// irradiance per band (W/m^2 on a plane facing the source).
+pub(crate) const fn beam_floats(bands: usize) -> usize {
+    3 + bands
+}
+
+/// A level's root and light.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LevelRoot<'b> {
+    /// The node whose subtree the level holds (its closed instances stop it).
+    pub node: u32,
+    /// The transform of that node's frame to world.
+    pub place: Similarity,
+    /// The scene's suns and sky (`None`), or these beams (see [`beam_floats`]) with how many
+    /// of them, first, are suns.
+    pub beams: Option<(&'b [f32], u32)>,
+}
+
+impl<'b> LevelRoot<'b> {
+    /// The whole scene.
+    pub(crate) fn scene<S: SceneSource>(view: &SceneView<S>) -> Self {
+        LevelRoot {
+            node: view.info().scene_root.0,
+            place: Similarity::IDENTITY,
+            beams: None,
+        }
+    }
+
+    /// Directional sources: suns, then sky directions or beams.
+    pub(crate) fn sources<S: SceneSource>(&self, view: &SceneView<S>) -> u32 {
+        match self.beams {
+            None => view.info().suns + view.info().sky,
+            Some((b, _)) => (b.len() / beam_floats(view.info().bands as usize)) as u32,
+        }
+    }
+
+    /// Of those, suns.
+    pub(crate) fn suns<S: SceneSource>(&self, view: &SceneView<S>) -> u32 {
+        match self.beams {
+            None => view.info().suns,
+            Some((_, suns)) => suns,
+        }
+    }
+}

@@ -1,0 +1,414 @@
+//! Hierarchical instantiation (the paper's section 3, figure 2): the scene is solved level by
+//! level on a stack in one workspace. A level holds a node's subtree down to the next
+//! instances, which stay closed (see `tables::closed`); once it is solved, its polygons and
+//! its instances are handed out depth first, in global-id order: runs of its own polygons
+//! go to the sink, and each instance in turn is opened: its contents become a level of their
+//! own, solved in the workspace left free above the parent's, under the light that reached
+//! the instance, then recursively handed out, then dropped.
+//!
+//! The light an opened instance's contents receive is what its closed self received, as
+//! beams: the suns and sky seen from its box (the same visibility through the level's
+//! polygons and the other closed instances that lit it), and every link that arrived on it,
+//! binned by direction into a few sky directions. The outside stays fixed, as in the paper;
+//! the contents see it as distant light, as they did when their tables were made.
+//! (Where the paper copies the links themselves onto the new root and refines them against
+//! the parent's elements, these beams keep the parent's state out of the child's
+//! workspace: only what the beams carry crosses the boundary.)
+
+use super::census::{Census, expanded_originals, subtree_polygons};
+use super::error::{HrError, SolveError};
+use super::exec::{Executor, Fallback, Progress};
+use super::ids::{Elem, Kind};
+use super::level::{LevelRoot, beam_floats};
+use super::run::Run;
+use super::settings::{Instancing, Settings, Stats};
+use super::state::State;
+use crate::NodeId;
+use crate::geometry::Similarity;
+use crate::image::{SceneSource, SceneView};
+use crate::limits::{MAX_BANDS, MAX_NODE_DEPTH, NONE};
+use crate::sink::Sink;
+use crate::tables::grid::DirectionGrid;
+use crate::visibility::Unoccluded;
+use glam::Vec3;
+
+/// Side of the direction grid the links into an instance are binned on (64 directions).
+const BEAM_SIDE: u32 = 8;
+
+/// Solves the scene level by level (see the module documentation) with the core's own BVH,
+/// and hands every polygon to `sink` in global-id order.
+pub fn solve_hi<S, K, E, P>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    workspace: &mut [u8],
+    executor: &mut E,
+    progress: &mut P,
+    sink: &mut K,
+) -> Result<Stats, SolveError<K::Error>>
+where
+    S: SceneSource,
+    K: Sink,
+    E: Executor,
+    P: Progress,
+{
+    settings.check()?;
+    // Every original's expanded polygon count, kept for the whole solve (global ids).
+    let originals = view.info().originals as usize;
+    let memo_bytes = originals * core::mem::size_of::<Census>();
+    let ws = super::plan::aligned(workspace);
+    if ws.len() < memo_bytes {
+        return Err(HrError::WorkspaceTooSmall {
+            needed: memo_bytes as u64,
+        }
+        .into());
+    }
+    let (memo, rest) = ws.split_at_mut(memo_bytes.next_multiple_of(super::layout::ALIGN));
+    let memo: &mut [Census] = if memo.is_empty() {
+        &mut []
+    } else {
+        bytemuck::try_cast_slice_mut(&mut memo[..memo_bytes])
+            .map_err(|_| HrError::ScratchTooSmall)?
+    };
+    expanded_originals(view, memo)?;
+    let memo: &[Census] = memo;
+    let mut total = Stats::default();
+    let origin = memo_bytes.next_multiple_of(super::layout::ALIGN);
+    let root = LevelRoot::scene(view);
+    let mut ctx = Ctx {
+        view,
+        settings,
+        memo,
+        progress,
+        sink,
+        stats: &mut total,
+        levels: 0,
+    };
+    level(&mut ctx, &root, rest, origin, executor, 0, 0)?;
+    total.workspace_bytes = workspace.len() as u64;
+    Ok(total)
+}
+
+/// What every level of a solve shares.
+struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
+    view: &'a SceneView<S>,
+    settings: &'a Settings,
+    memo: &'a [Census],
+    progress: &'a mut P,
+    sink: &'a mut K,
+    /// The top level's stats, with counts over all levels.
+    stats: &'a mut Stats,
+    levels: u64,
+}
+
+/// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
+/// workspace), its polygons' global ids from `first_id` on, then hands it out depth first,
+/// opening its instances.
+fn level<S, K, E, P>(
+    ctx: &mut Ctx<'_, S, K, P>,
+    root: &LevelRoot<'_>,
+    ws: &mut [u8],
+    origin: usize,
+    executor: &mut E,
+    first_id: u64,
+    depth: usize,
+) -> Result<(), SolveError<K::Error>>
+where
+    S: SceneSource,
+    K: Sink,
+    E: Executor,
+    P: Progress,
+{
+    if depth >= MAX_NODE_DEPTH {
+        return Err(HrError::SceneTooLarge.into());
+    }
+    let view = ctx.view;
+    let mut run = Run::<Unoccluded, E>::start(
+        view,
+        ctx.settings,
+        Instancing::Top,
+        root,
+        ws,
+        None,
+        executor,
+        ctx.progress,
+    )?;
+    run.rounds(ctx.progress);
+    let Run {
+        mut st,
+        ws,
+        vis,
+        seq,
+    } = run;
+    if st.stats.diverged {
+        return Err(SolveError::Hr(HrError::Diverged {
+            iterations: st.stats.iterations,
+        }));
+    }
+    let exec = seq.inner;
+    let scratch = seq.scratch;
+    st.stats.links = st.links.live() as u64;
+    st.stats.clusters = st.clusters as u64;
+    st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
+    st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
+    st.stats.emitted_power = st.power;
+    ctx.levels += 1;
+    {
+        let mut seq = Fallback {
+            inner: &mut *exec,
+            scratch: &mut *scratch,
+        };
+        let rays = 4 * st.settings.rays;
+        let balance = super::balance::measure(&st, ws, &vis, &mut seq, rays, ctx.progress);
+        st.stats.balance = balance;
+    }
+    add_level(ctx.stats, &st.stats, origin, depth == 0);
+    // The parent's part of the workspace stays as it is; children open above it.
+    let used = st.lay.blocks_base + st.blocks.used as usize * st.blocks.size;
+    let (mine, free) = ws.split_at_mut(used.min(ws.len()));
+    let mine: &[u8] = mine;
+    let mut polygon = 0u32;
+    let mut next_id = first_id;
+    // Level polygons not yet handed out: from `polygon - pending` on.
+    let mut pending = 0u32;
+    let end = view.node(NodeId(root.node))?.subtree_end;
+    let mut i = root.node;
+    while i < end {
+        let rec = view.node(NodeId(i))?;
+        if i != root.node && rec.instance().is_some() {
+            flush(
+                ctx,
+                &st,
+                mine,
+                &vis,
+                exec,
+                scratch,
+                polygon,
+                &mut pending,
+                next_id,
+            )?;
+            let leaf = find_instance(&st, mine, i);
+            let (node, place) = contents(view, &st, mine, leaf, i)?;
+            let count = subtree_polygons(view, node, ctx.memo)?;
+            if count > 0 {
+                let beams_at = 0usize;
+                let n = beams(&st, mine, leaf, free, beams_at)?;
+                let bands = st.bands;
+                let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
+                let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
+                let floats: &[f32] = bytemuck::cast_slice(&b[..n * beam_floats(bands) * 4]);
+                let child = LevelRoot {
+                    node,
+                    place,
+                    beams: Some((floats, st.suns)),
+                };
+                level(
+                    ctx,
+                    &child,
+                    child_ws,
+                    origin + used + bytes,
+                    &mut *exec,
+                    next_id,
+                    depth + 1,
+                )?;
+            }
+            next_id += count;
+            i = rec.subtree_end.max(i + 1);
+            continue;
+        }
+        // The level's own polygons, in load order (its nodes depth first).
+        polygon += rec.poly_count;
+        pending += rec.poly_count;
+        next_id += rec.poly_count as u64;
+        i += 1;
+    }
+    flush(
+        ctx,
+        &st,
+        mine,
+        &vis,
+        exec,
+        scratch,
+        polygon,
+        &mut pending,
+        next_id,
+    )?;
+    Ok(())
+}
+
+/// Hands the `pending` level polygons before `polygon` to the sink, the last of them with
+/// global id `next_id - 1`.
+#[allow(clippy::too_many_arguments)]
+fn flush<S, K, E, P>(
+    ctx: &mut Ctx<'_, S, K, P>,
+    st: &State,
+    ws: &[u8],
+    vis: &super::vis::Vis<'_, Unoccluded>,
+    exec: &mut E,
+    scratch: &mut [f32],
+    polygon: u32,
+    pending: &mut u32,
+    next_id: u64,
+) -> Result<(), SolveError<K::Error>>
+where
+    S: SceneSource,
+    K: Sink,
+    E: Executor,
+    P: Progress,
+{
+    let count = core::mem::take(pending);
+    if count == 0 {
+        return Ok(());
+    }
+    let first = polygon - count;
+    let id_offset = next_id - count as u64 - first as u64;
+    let mut seq = Fallback {
+        inner: exec,
+        scratch,
+    };
+    super::output::emit_range(
+        st,
+        ws,
+        vis,
+        &mut seq,
+        ctx.progress,
+        ctx.sink,
+        first,
+        count,
+        id_offset,
+    )
+    .map_err(SolveError::Sink)?;
+    Ok(())
+}
+
+/// The closed instance of node `node` (NONE when the level has none: it was loaded as
+/// such, so it cannot happen).
+fn find_instance(st: &State, ws: &[u8], node: u32) -> u32 {
+    (0..st.instances)
+        .find(|&k| st.instance(ws, k).node == node)
+        .unwrap_or(NONE)
+}
+
+/// The node whose subtree an opened instance's contents are, and its transform to world:
+/// an exact instance's original's root, an approximate one's own node, placed as the leaf.
+fn contents<S: SceneSource>(
+    view: &SceneView<S>,
+    st: &State,
+    ws: &[u8],
+    leaf: u32,
+    node: u32,
+) -> Result<(u32, Similarity), HrError> {
+    if leaf == NONE {
+        return Err(HrError::SceneTooLarge);
+    }
+    let l = st.instance(ws, leaf);
+    let place = Similarity {
+        rotation: glam::Quat::from_array(l.rotation),
+        translation: l.translation.into(),
+        scale: l.scale,
+    };
+    let rec = view.node(NodeId(node))?;
+    let id = rec.instance().ok_or(HrError::SceneTooLarge)?;
+    let inst = view.instance(id)?;
+    if inst.is_exact() {
+        Ok((view.original(inst.original())?.root, place))
+    } else {
+        Ok((node, place))
+    }
+}
+
+/// Writes into `out` (from byte `at`) the beams that light closed instance `leaf`'s
+/// contents: every source of the level as it reached the instance, then the links it
+/// received binned by direction; returns how many.
+fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<usize, HrError> {
+    let nb = st.bands;
+    let stride = beam_floats(nb);
+    let grid = DirectionGrid::new(BEAM_SIDE).map_err(|_| HrError::SceneTooLarge)?;
+    let cells = grid.cells() as usize;
+    let n_max = st.sources as usize + cells;
+    let need = at + 4 * n_max * stride;
+    if out.len() < need {
+        return Err(HrError::WorkspaceTooSmall {
+            needed: need as u64,
+        });
+    }
+    let floats: &mut [f32] = bytemuck::cast_slice_mut(&mut out[at..need]);
+    let mut n = 0usize;
+    for k in 0..st.sources {
+        let src = Elem::new(Kind::Source, k);
+        let super::state::Shape::Source { towards } = st.shape(ws, src) else {
+            continue;
+        };
+        let seen = super::instance_light::seen_fraction(st, ws, leaf, k);
+        let b = &mut floats[n * stride..(n + 1) * stride];
+        b[..3].copy_from_slice(&towards.to_array());
+        if let Some(irr) = st.b(ws, src, 0) {
+            for (o, v) in b[3..].iter_mut().zip(irr) {
+                *o = v * seen;
+            }
+        }
+        n += 1;
+    }
+    // The links: per cell of the grid, the flux density and its mean direction.
+    let mut sum = [[0.0f32; MAX_BANDS]; (BEAM_SIDE * BEAM_SIDE) as usize];
+    let mut dir = [Vec3::ZERO; (BEAM_SIDE * BEAM_SIDE) as usize];
+    let at_centre = super::instance_kernel::centre_of(st, ws, leaf);
+    let mut cur = st.links_head(ws, Elem::new(Kind::Instance, leaf));
+    while cur != NONE {
+        let l = st.link(ws, cur);
+        let mut s = [0.0f32; MAX_BANDS];
+        super::instance_light::link_flux(
+            st,
+            ws,
+            cur,
+            at_centre,
+            st.lay.strides.link_k,
+            &mut s[..nb],
+        );
+        let d = Vec3::from(l.dir);
+        if d != Vec3::ZERO {
+            let c = grid.cell_of(d) as usize;
+            let w = s[..nb].iter().copied().fold(0.0f32, f32::max);
+            for (a, v) in sum[c].iter_mut().zip(&s[..nb]) {
+                *a += v;
+            }
+            dir[c] += d * w;
+        }
+        cur = l.next;
+    }
+    for c in 0..cells {
+        if sum[c][..nb].iter().all(|&v| v <= 0.0) {
+            continue;
+        }
+        let d = if dir[c] != Vec3::ZERO {
+            dir[c].normalize()
+        } else {
+            grid.direction(c as u32)
+        };
+        let b = &mut floats[n * stride..(n + 1) * stride];
+        b[..3].copy_from_slice(&d.to_array());
+        b[3..].copy_from_slice(&sum[c][..nb]);
+        n += 1;
+    }
+    Ok(n)
+}
+
+/// Adds a level's counts to the solve's; the top level's stats stand for the solve.
+fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
+    if top {
+        let peak = total.peak_bytes;
+        *total = *level;
+        total.peak_bytes = peak;
+    } else {
+        total.polygons += level.polygons;
+        total.clusters += level.clusters;
+        total.patches += level.patches;
+        total.links += level.links;
+        total.evaluations += level.evaluations;
+        total.rays += level.rays;
+        total.iterations += level.iterations;
+        total.budget_limited |= level.budget_limited;
+        total.iteration_capped |= level.iteration_capped;
+        total.converged &= level.converged;
+    }
+    total.peak_bytes = total.peak_bytes.max(origin as u64 + level.peak_bytes);
+}
