@@ -404,7 +404,8 @@ fn back_direct<V: Visibility + ?Sized>(
                 ((j % grid) as f32 + u) / grid as f32,
                 ((j / grid) as f32 + v) / grid as f32,
             );
-            lit += vis.transmittance_towards(x, st.beyond(x, towards), towards, [poly, NONE]);
+            let skip = st.source_skip(ws, k, poly);
+            lit += vis.transmittance_towards(x, st.beyond(x, towards), towards, skip);
         }
         lit /= (grid * grid) as f32;
         let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);

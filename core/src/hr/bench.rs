@@ -41,6 +41,7 @@ pub fn start<S: SceneSource, V: Visibility + ?Sized, E: Executor>(
         settings,
         Instancing::None,
         &super::level::LevelRoot::scene(view),
+        None,
         workspace,
         Some(vis),
         executor,

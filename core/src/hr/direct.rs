@@ -216,7 +216,8 @@ fn prepare<V: Visibility + ?Sized>(
                 continue;
             }
             let seed = hash3(e.0, k, 0x5A11);
-            let lit = lit_fraction(st, corners, cells, seed, p.poly, towards, vis, &mut rays);
+            let skip = st.source_skip(ws, k, p.poly);
+            let lit = lit_fraction(st, corners, cells, seed, skip, towards, vis, &mut rays);
             let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
             let mut e_max = 0.0f32;
             for (b, d) in direct[side][..nb].iter_mut().enumerate() {
@@ -480,7 +481,7 @@ fn lit_fraction<V: Visibility + ?Sized>(
     corners: &[Vec3],
     cells: u32,
     seed: u32,
-    poly: u32,
+    skip: [u32; 2],
     towards: Vec3,
     vis: &V,
     rays: &mut u32,
@@ -498,7 +499,7 @@ fn lit_fraction<V: Visibility + ?Sized>(
             let vv = v0 + ((k / 2) as f32 + jv) * half;
             let x = point_on(corners, u, vv);
             *rays += 1;
-            *v = vis.transmittance_towards(x, st.beyond(x, towards), towards, [poly, NONE]);
+            *v = vis.transmittance_towards(x, st.beyond(x, towards), towards, skip);
             *w = jacobian(corners, u, vv);
         }
         (vals, wts)
@@ -652,7 +653,8 @@ fn sky_light<V: Visibility + ?Sized>(
         let x = point_on(corners, u, v);
         *rays += 1;
         let towards = Vec3::from(src.towards);
-        let t = vis.transmittance_towards(x, st.beyond(x, towards), towards, [p.poly, NONE]);
+        let skip = st.source_skip(ws, pick, p.poly);
+        let t = vis.transmittance_towards(x, st.beyond(x, towards), towards, skip);
         if t <= 0.0 {
             continue;
         }

@@ -711,7 +711,8 @@ fn to_point<V: Visibility + ?Sized>(
             if c <= 0.0 {
                 return (0.0, 0.0, 0, NO);
             }
-            let v = vis.transmittance_towards(x, st.beyond(x, towards), towards, [poly, NONE]);
+            let skip = st.source_skip(ws, emit.index(), poly);
+            let v = vis.transmittance_towards(x, st.beyond(x, towards), towards, skip);
             out.rays += 1;
             out.partial |= v < 1.0;
             (c * v, c, 0, NO)

@@ -57,7 +57,8 @@ fn visible_fraction<V: Visibility + ?Sized>(
         let local = lo + (hi - lo) * unit3(i, k, j);
         let x = place.point(local);
         let end = st.beyond(x, towards);
-        sum += ray.transmittance_towards(x, end, towards, [SKIP_INSTANCE | i, NONE]);
+        let skip = [SKIP_INSTANCE | i, st.source_skip(ws, k, NONE)[1]];
+        sum += ray.transmittance_towards(x, end, towards, skip);
     }
     (sum / n as f32, n)
 }
@@ -105,8 +106,6 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
                 for (slot, p) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(pairs)).enumerate() {
                     let (i, k) = ((p / sources) as u32, (p % sources) as u32);
                     let (t, rays) = (buf[2 * slot], buf[2 * slot + 1] as u64);
-                    let at = c.st.lay.instance_sources + 4 * p;
-                    super::pool::write(c.ws, at, &t);
                     c.st.stats.rays += rays;
                     c.st.stats.rays_by_phase.lighting += rays;
                     let src = Elem::new(Kind::Source, k);
@@ -131,12 +130,6 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
         );
     }
     start_from_direct(st, ws);
-}
-
-/// The mean transmittance from closed instance `i`'s box towards source `k` (as lit).
-pub(crate) fn seen_fraction(st: &State, ws: &[u8], i: u32, k: u32) -> f32 {
-    let p = i as usize * st.sources as usize + k as usize;
-    super::pool::read(ws, st.lay.instance_sources + 4 * p)
 }
 
 /// Sets every closed instance's whole light to its direct light (before links add theirs).

@@ -134,9 +134,6 @@ pub(crate) struct Layout {
     pub table_bytes_end: usize,
     /// The BVH over the closed instances' boxes (see `blockers`).
     pub closed_bvh: usize,
-    /// Per closed instance and source, the mean transmittance from its box towards the
-    /// source (see `instance_light`).
-    pub instance_sources: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
@@ -226,11 +223,6 @@ impl Layout {
         let table_visible_at = region(usize::try_from(census.table_bytes).ok()?)?;
         let table_bytes_end = region(0)?;
         let closed_bvh_at = region(super::blockers::bytes_needed(n_instances))?;
-        let instance_sources_at = region(
-            (n_instances as usize)
-                .checked_mul(sources as usize)?
-                .checked_mul(4)?,
-        )?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -298,7 +290,6 @@ impl Layout {
             table_visible: table_visible_at,
             table_bytes_end,
             closed_bvh: closed_bvh_at,
-            instance_sources: instance_sources_at,
             n_clusters,
             n_polygons,
             n_instances,

@@ -5,10 +5,19 @@
 use crate::geometry::Similarity;
 use crate::image::{SceneSource, SceneView};
 
-/// Floats of one beam for `bands` bands: the unit direction towards its source, then its
-/// irradiance per band (W/m^2 on a plane facing the source).
+/// Floats of one beam for `bands` bands: the unit direction towards its source, how many
+/// outer levels its rays go through (the bits of a u32: NONE for all, see
+/// `records::Source::outer`), then its irradiance per band (W/m^2 on a plane facing the
+/// source).
 pub(crate) const fn beam_floats(bands: usize) -> usize {
-    3 + bands
+    4 + bands
+}
+
+/// Beam `k`'s outer levels (see [`beam_floats`]).
+pub(crate) fn beam_outer(beams: &[f32], k: usize, bands: usize) -> u32 {
+    beams
+        .get(k * beam_floats(bands) + 3)
+        .map_or(crate::limits::NONE, |v| v.to_bits())
 }
 
 /// A level's root and light.

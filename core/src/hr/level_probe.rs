@@ -235,6 +235,7 @@ where
         settings,
         instancing,
         &super::level::LevelRoot::scene(view),
+        None,
         workspace,
         None,
         executor,

@@ -148,7 +148,7 @@ pub(crate) fn load<S: SceneSource>(
             Some((b, _)) => {
                 let v = &b[k as usize * beam..(k as usize + 1) * beam];
                 let mut irradiance = [0.0f32; MAX_BANDS];
-                irradiance[..bands].copy_from_slice(&v[3..]);
+                irradiance[..bands].copy_from_slice(&v[4..]);
                 crate::image::LightData {
                     towards: Vec3::new(v[0], v[1], v[2]),
                     irradiance,
@@ -162,7 +162,10 @@ pub(crate) fn load<S: SceneSource>(
             at,
             &Source {
                 towards: l.towards.to_array(),
-                reserved: 0,
+                outer: match level.beams {
+                    None => NONE,
+                    Some((b, _)) => super::level::beam_outer(b, k as usize, bands),
+                },
             },
         );
         s.b_mut(ws, e, 0).copy_from_slice(&l.irradiance[..bands]);

@@ -94,6 +94,7 @@ where
         settings,
         Instancing::None,
         &level::LevelRoot::scene(view),
+        None,
         workspace,
         visibility,
         executor,

@@ -83,7 +83,7 @@ where
         stats: &mut total,
         levels: 0,
     };
-    level(&mut ctx, &root, rest, origin, executor, 0, 0)?;
+    level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
     total.workspace_bytes = workspace.len() as u64;
     Ok(total)
 }
@@ -103,9 +103,11 @@ struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
 /// workspace), its polygons' global ids from `first_id` on, then hands it out depth first,
 /// opening its instances.
+#[allow(clippy::too_many_arguments)]
 fn level<S, K, E, P>(
     ctx: &mut Ctx<'_, S, K, P>,
     root: &LevelRoot<'_>,
+    outer: Option<&super::vis::Outer<'_>>,
     ws: &mut [u8],
     origin: usize,
     executor: &mut E,
@@ -127,6 +129,7 @@ where
         ctx.settings,
         Instancing::Top,
         root,
+        outer,
         ws,
         None,
         executor,
@@ -201,9 +204,17 @@ where
                     place,
                     beams: Some((floats, st.suns)),
                 };
+                // The contents' rays go on through this level (and those it is open in).
+                let here = super::vis::Outer {
+                    vis: &vis,
+                    st: &st,
+                    ws: mine,
+                    opened: leaf,
+                };
                 level(
                     ctx,
                     &child,
+                    Some(&here),
                     child_ws,
                     origin + used + bytes,
                     &mut *exec,
@@ -338,13 +349,19 @@ fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<
         let super::state::Shape::Source { towards } = st.shape(ws, src) else {
             continue;
         };
-        let seen = super::instance_light::seen_fraction(st, ws, leaf, k);
+        // Whole: the contents' own rays find what shades them in this level, and on
+        // through the levels this one's rays go through for this source.
+        let rec: super::records::Source = super::pool::read(ws, st.at(ws, src));
+        let outer = if rec.outer == NONE {
+            NONE
+        } else {
+            rec.outer + 1
+        };
         let b = &mut floats[n * stride..(n + 1) * stride];
         b[..3].copy_from_slice(&towards.to_array());
+        b[3] = f32::from_bits(outer);
         if let Some(irr) = st.b(ws, src, 0) {
-            for (o, v) in b[3..].iter_mut().zip(irr) {
-                *o = v * seen;
-            }
+            b[4..].copy_from_slice(irr);
         }
         n += 1;
     }
@@ -384,9 +401,12 @@ fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<
         } else {
             grid.direction(c as u32)
         };
+        // Light that came through a link was shaded on its way: the contents' rays
+        // towards it see only their own level.
         let b = &mut floats[n * stride..(n + 1) * stride];
         b[..3].copy_from_slice(&d.to_array());
-        b[3..].copy_from_slice(&sum[c][..nb]);
+        b[3] = f32::from_bits(0);
+        b[4..].copy_from_slice(&sum[c][..nb]);
         n += 1;
     }
     Ok(n)

@@ -159,8 +159,10 @@ pub(crate) struct TableSlot {
 pub(crate) struct Source {
     /// Unit vector from the scene towards the source.
     pub towards: [f32; 3],
-    /// Unused.
-    pub reserved: u32,
+    /// How many of the levels an opened instance's contents lie in its rays go on through
+    /// (see `vis::Outer`): NONE for the scene's suns and sky (all of them), 0 for light that
+    /// reached the instance through a link (already shaded on its way).
+    pub outer: u32,
 }
 
 /// An input polygon: what every patch of it shares. Followed, per side and band, by its

@@ -88,6 +88,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         settings: &Settings,
         instancing: Instancing,
         level: &LevelRoot<'_>,
+        outer: Option<&'w vis::Outer<'w>>,
         workspace: &'w mut [u8],
         visibility: Option<&'w V>,
         executor: &'w mut E,
@@ -140,7 +141,10 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         })?;
         let vis = match visibility {
             Some(v) => vis::Vis::External(v),
-            None => vis::Vis::Internal(core_bvh(&st, ws, bvh_bytes)?),
+            None => match outer {
+                None => vis::Vis::Internal(core_bvh(&st, ws, bvh_bytes)?),
+                Some(o) => vis::Vis::Nested(core_bvh(&st, ws, bvh_bytes)?, o),
+            },
         };
         st.stats.workspace_bytes = total as u64;
         bins::allocate(&mut st, ws);

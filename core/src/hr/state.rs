@@ -607,6 +607,13 @@ impl State {
         }
     }
 
+    /// The `skip` of a ray from polygon `poly` towards source `k`: the polygon, and how far
+    /// the ray goes through the levels an opened instance lies in (see `records::Source`).
+    pub(crate) fn source_skip(&self, ws: &[u8], k: u32, poly: u32) -> [u32; 2] {
+        let src: Source = read(ws, self.at(ws, Elem::new(Kind::Source, k)));
+        [poly, super::vis::depth_entry(src.outer)]
+    }
+
     /// Bytes of the workspace in use: the static part and the blocks handed out.
     pub(crate) fn bytes_in_use(&self) -> usize {
         self.lay.static_bytes + self.blocks.used as usize * self.blocks.size

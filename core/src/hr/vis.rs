@@ -13,6 +13,63 @@ pub(crate) enum Vis<'a, V: ?Sized> {
     External(&'a V),
     /// The core's BVH over the polygons in the workspace.
     Internal(Bvh<'a>),
+    /// The core's BVH over an opened instance's level, and the levels it is open in: a ray
+    /// goes on through them (their polygons and their other closed instances), as in the
+    /// paper's stack of open levels.
+    Nested(Bvh<'a>, &'a Outer<'a>),
+}
+
+/// The level an instance was opened in, as its contents' rays see it.
+pub(crate) struct Outer<'a> {
+    pub vis: &'a Vis<'a, crate::visibility::Unoccluded>,
+    pub st: &'a State,
+    pub ws: &'a [u8],
+    /// The opened instance (its contents are the inner level, not a blocker).
+    pub opened: u32,
+}
+
+/// A `skip` entry that limits how many outer levels a ray goes through: `DEPTH | n` (polygon
+/// ids never have this bit, nor instance entries, see `blockers::SKIP_INSTANCE`).
+pub(crate) const DEPTH: u32 = 1 << 30;
+
+/// The `skip` entry for a ray towards a source whose rays go through `outer` outer levels
+/// (see `records::Source::outer`).
+pub(crate) fn depth_entry(outer: u32) -> u32 {
+    if outer == crate::limits::NONE {
+        crate::limits::NONE
+    } else {
+        DEPTH | outer.min(DEPTH - 1)
+    }
+}
+
+/// How many outer levels a ray with `skip` may still go through (`None`: all).
+fn depth_left(skip: [u32; 2]) -> Option<u32> {
+    skip.iter()
+        .find(|&&s| s != crate::limits::NONE && s & (DEPTH | (1 << 31)) == DEPTH)
+        .map(|s| s & (DEPTH - 1))
+}
+
+impl Outer<'_> {
+    fn ray(&self) -> Ray<'_, crate::visibility::Unoccluded> {
+        Ray {
+            vis: self.vis,
+            polys: WsPolygons {
+                st: self.st,
+                ws: self.ws,
+            },
+        }
+    }
+
+    /// The `skip` of a ray that comes out of the opened instance with `skip`; `None` when
+    /// it may go through no more outer levels.
+    fn skip(&self, skip: [u32; 2]) -> Option<[u32; 2]> {
+        let rest = match depth_left(skip) {
+            None => crate::limits::NONE,
+            Some(0) => return None,
+            Some(d) => DEPTH | (d - 1),
+        };
+        Some([super::blockers::SKIP_INSTANCE | self.opened, rest])
+    }
 }
 
 /// The input polygons as the root patches in the workspace hold them.
@@ -60,11 +117,20 @@ impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
     fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
         let t = match self.vis {
             Vis::External(v) => v.transmittance(from, to, skip),
-            Vis::Internal(bvh) => {
+            Vis::Internal(bvh) | Vis::Nested(bvh, _) => {
                 BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip)
             }
         };
-        self.closed(t, from, to, skip)
+        let t = self.closed(t, from, to, skip);
+        match self.vis {
+            // Between two points of an opened instance: what of the outer levels lies
+            // between them (the parts of neighbours' boxes that overlap its own).
+            Vis::Nested(_, outer) if t > 0.0 => match outer.skip(skip) {
+                Some(s) => t * outer.ray().transmittance(from, to, s),
+                None => t,
+            },
+            _ => t,
+        }
     }
 
     fn transmittance_towards(&self, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
@@ -74,13 +140,28 @@ impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
                 self.closed(t, from, to, skip)
             }
             Vis::Internal(_) => self.transmittance(from, to, skip),
+            Vis::Nested(bvh, outer) => {
+                let t = BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip);
+                let t = self.closed(t, from, to, skip);
+                if t <= 0.0 {
+                    return 0.0;
+                }
+                // On out of the outer levels, as far as they reach.
+                let Some(s) = outer.skip(skip) else {
+                    return t;
+                };
+                let end = outer.st.beyond(from, towards);
+                t * outer.ray().transmittance_towards(from, end, towards, s)
+            }
         }
     }
 
     fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
         match self.vis {
             Vis::External(v) => v.first_hit(from, to, skip),
-            Vis::Internal(bvh) => BvhVisibility::new(*bvh, self.polys).first_hit(from, to, skip),
+            Vis::Internal(bvh) | Vis::Nested(bvh, _) => {
+                BvhVisibility::new(*bvh, self.polys).first_hit(from, to, skip)
+            }
         }
     }
 }

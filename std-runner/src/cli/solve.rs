@@ -17,6 +17,11 @@ use std::time::Instant;
 pub enum Method {
     /// Hierarchical radiosity with clustering over the expanded scene.
     Hr,
+    /// Hierarchical instantiation (the paper's method): the scene solved level by level,
+    /// instances closed through their originals' directional tables and opened one at a
+    /// time, so that memory holds one path of levels. Needs the tables in the image
+    /// (`hirad tables SCENE -o OUT.hirb`); uses the core's own BVH.
+    Hi,
     /// Classic full-matrix radiosity on a uniformly subdivided mesh (the reference; scenes
     /// of a few thousand elements).
     Exact,
@@ -356,9 +361,10 @@ pub fn run(a: Args) -> Result<()> {
     let progress = Progress::new(a.quiet);
     let method = match a.method {
         Method::Hr => "hr",
+        Method::Hi => "hi",
         Method::Exact => "exact",
     };
-    let hr = a.method == Method::Hr;
+    let hr = a.method != Method::Exact;
     // f32 settings as the decimal given, not its f32 widening (1e-3, not 0.0010000000474).
     let decimal = |v: f32| v.to_string().parse().unwrap_or(v as f64);
     let count = |v: u32| {
@@ -406,7 +412,7 @@ pub fn run(a: Args) -> Result<()> {
         ..SolveReport::default()
     };
     match a.method {
-        Method::Hr => {
+        Method::Hr | Method::Hi => {
             let settings = Settings {
                 epsilon: a.epsilon,
                 rays: a.rays,
@@ -417,15 +423,19 @@ pub fn run(a: Args) -> Result<()> {
                 max_iterations: a.max_iterations,
                 ..Settings::default()
             };
-            let run = solve::solve_hr(
-                scene,
-                &settings,
-                threads,
-                a.memory,
-                a.visibility,
-                &progress,
-                &mut outputs,
-            )
+            let run = if a.method == Method::Hi {
+                solve::solve_hi(scene, &settings, threads, a.memory, &progress, &mut outputs)
+            } else {
+                solve::solve_hr(
+                    scene,
+                    &settings,
+                    threads,
+                    a.memory,
+                    a.visibility,
+                    &progress,
+                    &mut outputs,
+                )
+            }
             .with_context(|| format!("{}", a.scene.display()))?;
             let s = run.stats;
             report.threads = run.threads as u32;
@@ -608,13 +618,19 @@ fn warn_unused(a: &Args) {
     if a.image.is_some() && a.up.is_some() && a.camera.is_some() {
         eprintln!("warning: --up has no effect with --camera (the camera gives its own up)");
     }
-    if a.method == Method::Hr && a.epsilon >= 1.0 {
+    let hr = a.method != Method::Exact;
+    if a.method == Method::Hi && a.visibility != VisibilityChoice::Core {
+        eprintln!(
+            "note: --method hi casts its rays with the core's own BVH, level by level (--visibility has no effect)"
+        );
+    }
+    if hr && a.epsilon >= 1.0 {
         eprintln!(
             "warning: --epsilon {} is at least 1: no link carries that much of the scene's light, so nothing is refined (the coarsest solution; the default is 1e-3, smaller is finer)",
             a.epsilon
         );
     }
-    if a.method == Method::Hr && a.min_area >= 0.25 {
+    if hr && a.min_area >= 0.25 {
         eprintln!(
             "warning: --min-area {} leaves no patch room to split (a quarter of a polygon is less than that fraction of the scene's area)",
             a.min_area

@@ -160,14 +160,56 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     progress: &Progress,
     sink: &mut K,
 ) -> Result<HrRun> {
+    run_hr(
+        scene, settings, false, threads, memory, visibility, progress, sink,
+    )
+}
+
+/// Solves `scene` by hierarchical instantiation (`hirad_core::hr::solve_hi`: level by
+/// level, the instances closed through the tables the scene carries), streaming results
+/// into `sink` in global-id order.
+pub fn solve_hi<K: Sink<Error = anyhow::Error>>(
+    scene: &Scene,
+    settings: &Settings,
+    threads: usize,
+    memory: Option<u64>,
+    progress: &Progress,
+    sink: &mut K,
+) -> Result<HrRun> {
+    run_hr(
+        scene,
+        settings,
+        true,
+        threads,
+        memory,
+        VisibilityChoice::Core,
+        progress,
+        sink,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_hr<K: Sink<Error = anyhow::Error>>(
+    scene: &Scene,
+    settings: &Settings,
+    hi: bool,
+    threads: usize,
+    memory: Option<u64>,
+    visibility: VisibilityChoice,
+    progress: &Progress,
+    sink: &mut K,
+) -> Result<HrRun> {
     let setup = Instant::now();
     let bytes = scene::compile(scene).map_err(|e| crate::exit::input(anyhow!("{e}")))?;
     let view = scene::read_image(&bytes).map_err(|e| crate::exit::input(anyhow!("{e}")))?;
-    let internal = visibility == VisibilityChoice::Core;
+    let internal = visibility == VisibilityChoice::Core || hi;
     let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
     let plan = hr::plan(&view, settings, internal, &mut scratch).map_err(classify)?;
+    // Hierarchical instantiation holds one path of levels: what it touches of a workspace
+    // (pages are taken lazily) is far less than the expanded scene's plan; without a
+    // budget it gets the expanded plan's size, of which it uses what its levels need.
     let size = memory.unwrap_or(plan.suggested_bytes);
-    if size < plan.min_bytes {
+    if size < plan.min_bytes && !hi {
         return Err(crate::exit::usage(anyhow!(
             "--memory {size} is too small for this scene: the coarsest solution needs {} bytes (suggested: {})",
             plan.min_bytes,
@@ -200,6 +242,14 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     adapter.times.push(("setup".to_string(), 0.0));
     adapter.current = Some((0, setup));
     let result = match visibility {
+        _ if hi => hr::solve_hi(
+            &view,
+            settings,
+            &mut workspace,
+            &mut exec,
+            &mut adapter,
+            sink,
+        ),
         VisibilityChoice::Obvhs => {
             let polygons = world_polygons(scene);
             let directions: Vec<Vec3> = scene.suns.iter().map(|l| l.towards).collect();
