@@ -57,6 +57,61 @@ pub(crate) fn build(st: &State, ws: &mut [u8]) -> Result<(), HrError> {
     Ok(())
 }
 
+/// Notes every closed instance's `tau` towards every source: rays towards suns and sky
+/// directions, most of all rays, then look it up (see [`transmittance_towards`]).
+pub(crate) fn note_source_tau(st: &State, ws: &mut [u8]) {
+    for k in 0..st.sources {
+        let super::state::Shape::Source { towards } =
+            st.shape(ws, super::ids::Elem::new(super::ids::Kind::Source, k))
+        else {
+            continue;
+        };
+        for i in 0..st.instances {
+            let t = st.placed(ws, i).tau(towards);
+            let at = st.lay.source_tau + 4 * (i as usize * st.sources as usize + k as usize);
+            super::pool::write(ws, at, &t);
+        }
+    }
+}
+
+/// The source whose direction is exactly `towards`, if any.
+fn source_of(st: &State, ws: &[u8], towards: Vec3) -> Option<u32> {
+    (0..st.sources).find(|&k| {
+        let at = st.at(ws, super::ids::Elem::new(super::ids::Kind::Source, k));
+        let s: super::records::Source = super::pool::read(ws, at);
+        Vec3::from(s.towards) == towards
+    })
+}
+
+/// [`transmittance`] of a segment along `towards`, the direction of a source: each
+/// instance's `tau` that way is looked up rather than interpolated.
+pub(crate) fn transmittance_towards(
+    st: &State,
+    ws: &[u8],
+    from: Vec3,
+    to: Vec3,
+    towards: Vec3,
+    skip: [u32; 2],
+) -> f32 {
+    if st.instances == 0 {
+        return 1.0;
+    }
+    let Some(k) = source_of(st, ws, towards) else {
+        return transmittance(st, ws, from, to, skip);
+    };
+    let mut t = 1.0f32;
+    bvh(st, ws).any_hit(from, to, |i| {
+        if skip.contains(&(SKIP_INSTANCE | i)) {
+            return false;
+        }
+        let at = st.lay.source_tau + 4 * (i as usize * st.sources as usize + k as usize);
+        let tau: f32 = super::pool::read(ws, at);
+        t *= st.placed(ws, i).transmittance_with(from, to, tau);
+        t <= 0.0
+    });
+    t.max(0.0)
+}
+
 /// The BVH over the level's closed instances (empty without).
 fn bvh<'a>(st: &State, ws: &'a [u8]) -> Bvh<'a> {
     let n = st.instances;

@@ -134,6 +134,8 @@ pub(crate) struct Layout {
     pub table_bytes_end: usize,
     /// The BVH over the closed instances' boxes (see `blockers`).
     pub closed_bvh: usize,
+    /// Per closed instance and source, `tau` towards the source (see `blockers`).
+    pub source_tau: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
@@ -223,6 +225,11 @@ impl Layout {
         let table_visible_at = region(usize::try_from(census.table_bytes).ok()?)?;
         let table_bytes_end = region(0)?;
         let closed_bvh_at = region(super::blockers::bytes_needed(n_instances))?;
+        let source_tau_at = region(
+            (n_instances as usize)
+                .checked_mul(sources as usize)?
+                .checked_mul(4)?,
+        )?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -290,6 +297,7 @@ impl Layout {
             table_visible: table_visible_at,
             table_bytes_end,
             closed_bvh: closed_bvh_at,
+            source_tau: source_tau_at,
             n_clusters,
             n_polygons,
             n_instances,

@@ -179,6 +179,7 @@ pub(crate) fn load<S: SceneSource>(
     finish_clusters(&mut s, ws);
     cluster_order(&mut s, ws);
     super::blockers::build(&s, ws)?;
+    super::blockers::note_source_tau(&s, ws);
     let n_sources = s.sources;
     totals(&mut s, ws, n_sources);
     if s.power.is_nan() || s.power <= 0.0 {

@@ -111,6 +111,15 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
         }
         t * super::blockers::transmittance(self.polys.st, self.polys.ws, from, to, skip)
     }
+
+    /// [`Self::closed`] of a segment along a source's direction `towards`.
+    fn closed_towards(&self, t: f32, from: Vec3, to: Vec3, towards: Vec3, skip: [u32; 2]) -> f32 {
+        if t <= 0.0 || self.polys.st.instances == 0 {
+            return t;
+        }
+        let (st, ws) = (self.polys.st, self.polys.ws);
+        t * super::blockers::transmittance_towards(st, ws, from, to, towards, skip)
+    }
 }
 
 impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
@@ -137,12 +146,15 @@ impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
         match self.vis {
             Vis::External(v) => {
                 let t = v.transmittance_towards(from, to, towards, skip);
-                self.closed(t, from, to, skip)
+                self.closed_towards(t, from, to, towards, skip)
             }
-            Vis::Internal(_) => self.transmittance(from, to, skip),
+            Vis::Internal(bvh) => {
+                let t = BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip);
+                self.closed_towards(t, from, to, towards, skip)
+            }
             Vis::Nested(bvh, outer) => {
                 let t = BvhVisibility::new(*bvh, self.polys).transmittance(from, to, skip);
-                let t = self.closed(t, from, to, skip);
+                let t = self.closed_towards(t, from, to, towards, skip);
                 if t <= 0.0 {
                     return 0.0;
                 }

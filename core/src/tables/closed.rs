@@ -149,16 +149,36 @@ impl<'a> Placed<'a> {
             return 1.0;
         }
         let t = self.tau((to - from).normalize_or_zero());
-        let share = if s1 > s0 { (b - a) / (s1 - s0) } else { 1.0 };
-        if share >= 1.0 {
-            t
-        } else if t <= 0.0 {
-            if share > 0.0 { 0.0 } else { 1.0 }
-        } else {
-            libm::powf(t, share)
-        }
+        share_of(t, s0, s1, a, b)
     }
 
+    /// [`Self::transmittance`] with `tau` of the segment's direction given (looked up).
+    pub fn transmittance_with(&self, from: Vec3, to: Vec3, t: f32) -> f32 {
+        let Some((s0, s1)) = self.chord(from, to) else {
+            return 1.0;
+        };
+        let (a, b) = (s0.max(0.0), s1.min(1.0));
+        if a > b {
+            return 1.0;
+        }
+        share_of(t, s0, s1, a, b)
+    }
+}
+
+/// `t` to the power of the share `(b - a) / (s1 - s0)` of a chord (see
+/// [`Placed::transmittance`]).
+fn share_of(t: f32, s0: f32, s1: f32, a: f32, b: f32) -> f32 {
+    let share = if s1 > s0 { (b - a) / (s1 - s0) } else { 1.0 };
+    if share >= 1.0 {
+        t
+    } else if t <= 0.0 {
+        if share > 0.0 { 0.0 } else { 1.0 }
+    } else {
+        libm::powf(t, share)
+    }
+}
+
+impl Placed<'_> {
     /// Floats of storage the light received by this instance needs (see [`Received`]).
     pub fn received_len(&self) -> usize {
         received_floats(

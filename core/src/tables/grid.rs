@@ -29,6 +29,10 @@ pub enum GridError {
     Side(u32),
 }
 
+/// A triangle of cell centres around a direction: its cells, the direction's barycentric
+/// coordinates, the least of them and the centres' directions.
+type Triangle = ([u32; 3], [f32; 3], f32, [Vec3; 3]);
+
 impl DirectionGrid {
     /// The grid of one cell: the whole sphere.
     pub const ONE: DirectionGrid = DirectionGrid { side: 1 };
@@ -87,6 +91,12 @@ impl DirectionGrid {
     /// there: there the four centres around `d` on the square need not even surround it on
     /// the sphere (5.6% worst error at side 16 on a function ranging over 1.4, against 2.9%).
     pub fn weights(&self, d: Vec3) -> [(u32, f32); 4] {
+        self.weights_directions(d).map(|(c, w, _)| (c, w))
+    }
+
+    /// [`Self::weights`] with each cell's centre direction (what lookups that weigh cells by
+    /// a function of their direction need, without computing it again).
+    pub fn weights_directions(&self, d: Vec3) -> [(u32, f32, Vec3); 4] {
         let at = |i: i64, j: i64| self.wrapped(i, j);
         // The triangle that holds d on the sphere, of the fan around the centre of its own
         // cell and the eight cells about it (which covers the cell on the sphere, even
@@ -104,38 +114,43 @@ impl DirectionGrid {
             at(ci, cj - 1),
             at(ci + 1, cj - 1),
         ];
-        let mut best: Option<([u32; 3], [f32; 3], f32)> = None;
+        // Each centre's direction once (the triangles share them).
+        let own_dir = self.direction(own);
+        let mut ring_dir = [Vec3::ZERO; 8];
+        let mut known = [false; 8];
+        let mut best: Option<Triangle> = None;
         for k in 0..8 {
-            let cells = [own, ring[k], ring[(k + 1) % 8]];
-            let Some(l) = barycentric(
-                [
-                    self.direction(cells[0]),
-                    self.direction(cells[1]),
-                    self.direction(cells[2]),
-                ],
-                d,
-            ) else {
+            let (a, b) = (k, (k + 1) % 8);
+            for r in [a, b] {
+                if !known[r] {
+                    ring_dir[r] = self.direction(ring[r]);
+                    known[r] = true;
+                }
+            }
+            let cells = [own, ring[a], ring[b]];
+            let dirs = [own_dir, ring_dir[a], ring_dir[b]];
+            let Some(l) = barycentric(dirs, d) else {
                 continue;
             };
             let low = l[0].min(l[1]).min(l[2]);
             if best.is_none_or(|b| low > b.2 + 1e-6) {
-                best = Some((cells, l, low));
+                best = Some((cells, l, low, dirs));
             }
             if low >= -1e-6 {
                 break;
             }
         }
         match best {
-            Some((cells, l, _)) => {
+            Some((cells, l, _, dirs)) => {
                 let l = clamp(l);
                 [
-                    (cells[0], l[0]),
-                    (cells[1], l[1]),
-                    (cells[2], l[2]),
-                    (cells[2], 0.0),
+                    (cells[0], l[0], dirs[0]),
+                    (cells[1], l[1], dirs[1]),
+                    (cells[2], l[2], dirs[2]),
+                    (cells[2], 0.0, dirs[2]),
                 ]
             }
-            None => self.bilinear(d),
+            None => self.bilinear(d).map(|(c, w)| (c, w, self.direction(c))),
         }
     }
 

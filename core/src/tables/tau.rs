@@ -30,11 +30,11 @@ pub fn interpolate_tau(grid: &DirectionGrid, values: &[f32], lo: Vec3, hi: Vec3,
         return 1.0;
     }
     let shadow: f32 = grid
-        .weights(d)
+        .weights_directions(d)
         .iter()
-        .map(|&(c, w)| {
+        .map(|&(c, w, dc)| {
             let t = values.get(c as usize).copied().unwrap_or(1.0);
-            w * (1.0 - t) * projected_area(lo, hi, grid.direction(c))
+            w * (1.0 - t) * projected_area(lo, hi, dc)
         })
         .sum();
     (1.0 - shadow / area).clamp(0.0, 1.0)
@@ -56,13 +56,13 @@ pub fn interpolate_scattered(
     hi: Vec3,
     d: Vec3,
 ) -> f32 {
-    grid.weights(d)
+    grid.weights_directions(d)
         .iter()
-        .map(|&(c, w)| {
+        .map(|&(c, w, dc)| {
             let i = c as usize;
             let t = tau.get(i).copied().unwrap_or(1.0);
             let a = albedo.get(i * stride + at).copied().unwrap_or(0.0);
-            w * a * (1.0 - t) * projected_area(lo, hi, grid.direction(c))
+            w * a * (1.0 - t) * projected_area(lo, hi, dc)
         })
         .sum::<f32>()
         .max(0.0)
