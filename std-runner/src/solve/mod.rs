@@ -205,10 +205,24 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
     let internal = visibility == VisibilityChoice::Core || hi;
     let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
     let plan = hr::plan(&view, settings, internal, &mut scratch).map_err(classify)?;
-    // Hierarchical instantiation holds one path of levels: what it touches of a workspace
-    // (pages are taken lazily) is far less than the expanded scene's plan; without a
-    // budget it gets the expanded plan's size, of which it uses what its levels need.
-    let size = memory.unwrap_or(plan.suggested_bytes);
+    // Hierarchical instantiation holds one path of levels and their originals' tables: what
+    // it touches of a workspace (pages are taken lazily) is far less than the expanded
+    // scene's plan; without a budget it gets that plan's size and room for every table
+    // twice over, of which it uses what its levels need.
+    let size = match memory {
+        Some(m) => m,
+        None if hi => {
+            let mut tables = 0u64;
+            for i in 0..view.info().tables {
+                let r = view
+                    .table(i)
+                    .map_err(|e| crate::exit::input(anyhow!("{e}")))?;
+                tables += 4 * r.values() + r.visible_bytes();
+            }
+            plan.suggested_bytes + 2 * tables + (32 << 20)
+        }
+        None => plan.suggested_bytes,
+    };
     if size < plan.min_bytes && !hi {
         return Err(crate::exit::usage(anyhow!(
             "--memory {size} is too small for this scene: the coarsest solution needs {} bytes (suggested: {})",
