@@ -62,8 +62,9 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     ]);
     assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
     let (hi, hr) = (dir.path().join("hi.csv"), dir.path().join("hr.csv"));
+    let stats = dir.path().join("hi.json");
     for (method, path) in [("hi", &hi), ("hr", &hr)] {
-        let out = hirad(&[
+        let mut args = vec![
             "solve",
             s(&image),
             "--method",
@@ -71,7 +72,11 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
             "--results",
             s(path),
             "-q",
-        ]);
+        ];
+        if method == "hi" {
+            args.extend(["--stats", s(&stats)]);
+        }
+        let out = hirad(&args);
         assert!(
             out.status.success(),
             "{method}: {}",
@@ -93,6 +98,12 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
             );
         }
     }
+    // Its levels: the plant, its 5 branches and their 20 twigs; the twigs two levels down.
+    let json = std::fs::read_to_string(&stats).unwrap();
+    assert!(json.contains("\"method\": \"hi\""), "{json}");
+    assert!(json.contains("\"solved\": 26"), "{json}");
+    assert!(json.contains("\"deepest\": 2"), "{json}");
+    assert!(json.contains("\"closed_instances\": 25"), "{json}");
     // The scene without tables: an input error that says how to make them.
     let out = hirad(&["solve", s(&plant), "--method", "hi", "-q"]);
     assert_eq!(out.status.code(), Some(3));

@@ -84,7 +84,9 @@ where
         levels: 0,
     };
     level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
+    let levels = ctx.levels;
     total.workspace_bytes = workspace.len() as u64;
+    total.levels = levels;
     Ok(total)
 }
 
@@ -165,6 +167,9 @@ where
         st.stats.balance = balance;
     }
     add_level(ctx.stats, &st.stats, origin, depth == 0);
+    ctx.stats.level_depth = ctx.stats.level_depth.max(depth as u32);
+    ctx.stats.closed_instances += st.instances as u64;
+    ctx.stats.largest_level = ctx.stats.largest_level.max(st.stats.patches);
     // The parent's part of the workspace stays as it is; children open above it.
     let used = st.lay.blocks_base + st.blocks.used as usize * st.blocks.size;
     let (mine, free) = ws.split_at_mut(used.min(ws.len()));
@@ -415,9 +420,19 @@ fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<
 /// Adds a level's counts to the solve's; the top level's stats stand for the solve.
 fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
     if top {
-        let peak = total.peak_bytes;
+        let keep = (
+            total.peak_bytes,
+            total.level_depth,
+            total.closed_instances,
+            total.largest_level,
+        );
         *total = *level;
-        total.peak_bytes = peak;
+        (
+            total.peak_bytes,
+            total.level_depth,
+            total.closed_instances,
+            total.largest_level,
+        ) = keep;
     } else {
         total.polygons += level.polygons;
         total.clusters += level.clusters;

@@ -176,6 +176,15 @@ pub struct Stats {
     /// How much the last relighting pass moved the light leaving the surfaces, relative to
     /// what enters (largest band; 0 with fewer than two passes).
     pub final_change: f32,
+    /// Levels solved (hierarchical instantiation: the top level and every instance opened;
+    /// 0 for a solve of the expanded scene).
+    pub levels: u64,
+    /// The deepest level opened (the top level is 0).
+    pub level_depth: u32,
+    /// Closed instances over all levels.
+    pub closed_instances: u64,
+    /// The most leaf elements (patches) of one level.
+    pub largest_level: u64,
 }
 
 /// Visibility rays per phase of a solve (what the ray count of [`Stats`] is spent on).

@@ -47,7 +47,8 @@ pub use results::{ResultsFile, ResultsTable, ResultsWriter, TableLayout};
 pub use results_read::{TableError, read_results, read_results_file};
 pub use row_labels::RowLabels;
 pub use stats::{
-    BandPower, ImageSettings, OutputFile, PhaseTime, RaysByPhase, RunSettings, SolveReport, Verdict,
+    BandPower, ImageSettings, Levels, OutputFile, PhaseTime, RaysByPhase, RunSettings, SolveReport,
+    Verdict,
 };
 
 #[cfg(test)]

@@ -115,6 +115,19 @@ pub struct Verdict {
     pub reason: String,
 }
 
+/// Hierarchical instantiation's levels (`hirad solve --method hi`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Levels {
+    /// Levels solved: the top level and every instance opened.
+    pub solved: u64,
+    /// The deepest level opened (the top level is 0).
+    pub deepest: u32,
+    /// Closed instances over all levels.
+    pub closed_instances: u64,
+    /// The most leaf elements (patches) one level held.
+    pub largest_level_patches: u64,
+}
+
 /// Settings, counts, time, memory and error of one solve.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SolveReport {
@@ -133,7 +146,8 @@ pub struct SolveReport {
     /// Whether the numbers are right (`null` in files from before verdicts).
     #[serde(default)]
     pub verdict: Option<Verdict>,
-    /// Solver: `hr` (hierarchical with instantiation) or `exact`.
+    /// Solver: `hr` (hierarchical radiosity, the scene expanded), `hi` (hierarchical
+    /// instantiation) or `exact`.
     pub method: String,
     /// Refinement threshold epsilon (dimensionless: a link is refined while its transfer
     /// exceeds epsilon times the scene's emitted power); `null` for the exact solver, which
@@ -200,6 +214,9 @@ pub struct SolveReport {
     /// Of `rays`, those of each phase (hr; `null` for the exact solver).
     #[serde(default)]
     pub rays_by_phase: Option<RaysByPhase>,
+    /// Hierarchical instantiation's levels (`null` for the other methods).
+    #[serde(default)]
+    pub levels: Option<Levels>,
     /// Final gather passes made, the polygons' own included (hr; 0 without the gather;
     /// `null` for the exact solver).
     #[serde(default)]
