@@ -446,7 +446,7 @@ pub fn run(a: Args) -> Result<()> {
                 final_gather: s.rays_by_phase.final_gather,
             });
             report.final_passes = Some(s.final_passes);
-            report.levels = (a.method == Method::Hi).then(|| crate::output::Levels {
+            report.levels = (a.method == Method::Hi).then_some(crate::output::Levels {
                 solved: s.levels,
                 deepest: s.level_depth,
                 closed_instances: s.closed_instances,

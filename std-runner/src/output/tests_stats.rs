@@ -86,6 +86,12 @@ fn report() -> SolveReport {
             links: 20_000,
             final_gather: 3_456,
         }),
+        levels: Some(super::Levels {
+            solved: 26,
+            deepest: 2,
+            closed_instances: 25,
+            largest_level_patches: 1652,
+        }),
         final_passes: Some(3),
         final_change_percent: Some(0.42),
         image_error_percent: Some(1.5),
