@@ -82,6 +82,7 @@ pub(crate) fn load<S: SceneSource>(
         polygons: 0,
         child_entries: 0,
         power: 0.0,
+        unit_power: 0.0,
         suns: level.suns(view),
         sources: level.sources(view),
         typical_area: 0.0,

@@ -82,6 +82,7 @@ where
         sink,
         stats: &mut total,
         levels: 0,
+        unit_power: 0.0,
     };
     level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
     let levels = ctx.levels;
@@ -100,6 +101,8 @@ struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
     /// The top level's stats, with counts over all levels.
     stats: &'a mut Stats,
     levels: u64,
+    /// The top level's power (W, epsilon's unit for every level).
+    unit_power: f32,
 }
 
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
@@ -137,6 +140,8 @@ where
         executor,
         ctx.progress,
     )?;
+    // Refined by the scene's threshold: the top level's power, not the contents' own.
+    run.st.unit_power = ctx.unit_power;
     run.rounds(ctx.progress);
     let Run {
         mut st,
@@ -144,6 +149,9 @@ where
         vis,
         seq,
     } = run;
+    if depth == 0 {
+        ctx.unit_power = st.power;
+    }
     if st.stats.diverged {
         return Err(SolveError::Hr(HrError::Diverged {
             iterations: st.stats.iterations,

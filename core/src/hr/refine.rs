@@ -456,7 +456,7 @@ fn b_spread(st: &State, ws: &[u8], e: Elem) -> f32 {
 
 /// One pass over every receiver's links. Returns true if any link was split.
 fn refine_pass(st: &mut State, ws: &mut [u8]) -> bool {
-    let threshold = st.settings.epsilon * st.power;
+    let threshold = st.settings.epsilon * st.power.max(st.unit_power);
     let mut changed = false;
     // The receivers present when the pass starts (patches created during the pass only hold
     // pending links).
@@ -567,7 +567,7 @@ fn refine_shadows(st: &mut State, ws: &mut [u8]) -> bool {
     if st.suns == 0 {
         return false;
     }
-    let threshold = st.settings.epsilon * st.power;
+    let threshold = st.settings.epsilon * st.power.max(st.unit_power);
     let mut changed = false;
     for (kind, pool) in [(Kind::Patch1, 0usize), (Kind::Patch2, 1)] {
         // Within a round a checked patch's answer does not change (its shadow measure, the

@@ -32,6 +32,10 @@ pub(crate) struct State {
     /// largest band), as of the last solution; before the first, what they emit and reflect
     /// of the direct light.
     pub power: f32,
+    /// The power epsilon is relative to when it is larger than `power` (W): an opened
+    /// instance's level refines by its scene's threshold, as the expanded scene would; 0
+    /// otherwise.
+    pub unit_power: f32,
     /// Suns (the first sources) and all sources (suns, then sky directions).
     pub suns: u32,
     pub sources: u32,
