@@ -206,8 +206,7 @@ where
             let (node, place) = contents(view, &st, mine, leaf, i)?;
             let count = subtree_polygons(view, node, ctx.memo)?;
             if count > 0 {
-                let beams_at = 0usize;
-                let n = beams(&st, mine, leaf, free, beams_at)?;
+                let n = beams(&st, mine, leaf, free, 0)?;
                 let bands = st.bands;
                 let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
                 let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));

@@ -31,8 +31,8 @@ pub(super) fn aligned(ws: &mut [u8]) -> &mut [u8] {
 }
 
 /// Plans a solve: the exact minimum and a suggested workspace size. `scratch` must hold
-/// [`census_scratch_bytes`]. `internal_bvh`: whether the solve will build the core's own BVH
-/// in the workspace (no visibility given to [`solve`]) rather than use the caller's.
+/// [`super::census_scratch_bytes`]. `internal_bvh`: whether the solve will build the core's own BVH
+/// in the workspace (no visibility given to [`super::solve`]) rather than use the caller's.
 pub fn plan<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,

@@ -10,8 +10,8 @@ pub enum Instancing {
     /// Every instance expanded: hierarchical radiosity over the whole scene.
     #[default]
     None,
-    /// Every instance below the scene's root stays closed: the paper's first level. (Loaded
-    /// and counted so far; the level solve with closed instances is being built, issue 18.)
+    /// Every instance below the level's root stays closed: the levels of hierarchical
+    /// instantiation ([`super::solve_hi`]), each opened in turn.
     Top,
 }
 
@@ -47,7 +47,7 @@ pub struct Settings {
     /// pass solves the hierarchy again with what it changed, so the links carry the change
     /// on (see `relight::relight`). `AUTO` relights
     /// at least once and goes on (up to 4 passes in all) while a pass still moves the light
-    /// leaving the surfaces by more than [`relight::SETTLED`] of what enters.
+    /// leaving the surfaces by more than 0.5% of what enters (`relight::SETTLED`).
     pub final_passes: u32,
     /// Sides of the polygons that suns and sky light directly: bit 0 the fronts, bit 1 the
     /// backs ([`Settings::BOTH_SIDES`], the default: both, as light does). `hirad tables`
