@@ -106,10 +106,24 @@ pub(crate) fn transmittance_towards(
         }
         let at = st.lay.source_tau + 4 * (i as usize * st.sources as usize + k as usize);
         let tau: f32 = super::pool::read(ws, at);
-        t *= st.placed(ws, i).transmittance_with(from, to, tau);
+        // The box and the transform alone: the tau is known.
+        let (lo, hi, place) = placed_box(st, ws, i);
+        t *= crate::tables::closed::box_transmittance(lo, hi, &place, from, to, tau);
         t <= 0.0
     });
     t.max(0.0)
+}
+
+/// Closed instance `i`'s original's box and its transform to world.
+fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity) {
+    let leaf = st.instance(ws, i);
+    let r = st.slot(ws, leaf.slot).record;
+    let place = crate::geometry::Similarity {
+        rotation: glam::Quat::from_array(leaf.rotation),
+        translation: leaf.translation.into(),
+        scale: leaf.scale,
+    };
+    (Vec3::from(r.lo), Vec3::from(r.hi), place)
 }
 
 /// The BVH over the level's closed instances (empty without).
@@ -139,7 +153,11 @@ pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [
         if skip.contains(&(SKIP_INSTANCE | i)) {
             return false;
         }
-        t *= st.placed(ws, i).transmittance(from, to);
+        // The box first: the tables only for a segment that crosses it.
+        let (lo, hi, place) = placed_box(st, ws, i);
+        if crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
+            t *= st.placed(ws, i).transmittance(from, to);
+        }
         t <= 0.0
     });
     t.max(0.0)

@@ -63,11 +63,6 @@ impl<'a> Placed<'a> {
         (self.place.rotation.conjugate() * d).normalize_or_zero()
     }
 
-    /// A world point in the original's frame.
-    fn local_point(&self, x: Vec3) -> Vec3 {
-        self.place.rotation.conjugate() * (x - self.place.translation) / self.place.scale
-    }
-
     /// A world box that holds the placed box (m).
     pub fn bounds(&self) -> Aabb {
         let (lo, hi) = self.tables.bounds();
@@ -109,24 +104,7 @@ impl<'a> Placed<'a> {
     /// parameters `(s0, s1)` (0 at `from`, 1 at `to`), or `None` when the line misses it.
     fn chord(&self, from: Vec3, to: Vec3) -> Option<(f32, f32)> {
         let (lo, hi) = self.tables.bounds();
-        let (a, b) = (self.local_point(from), self.local_point(to));
-        let d = b - a;
-        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
-        for k in 0..3 {
-            if d[k] == 0.0 {
-                if a[k] < lo[k] || a[k] > hi[k] {
-                    return None;
-                }
-                continue;
-            }
-            let (mut ta, mut tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
-            if ta > tb {
-                core::mem::swap(&mut ta, &mut tb);
-            }
-            t0 = t0.max(ta);
-            t1 = t1.min(tb);
-        }
-        (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+        box_chord(lo, hi, &self.place, from, to)
     }
 
     /// True when the segment from `from` to `to` (world, m) crosses the placed box.
@@ -151,18 +129,61 @@ impl<'a> Placed<'a> {
         let t = self.tau((to - from).normalize_or_zero());
         share_of(t, s0, s1, a, b)
     }
+}
 
-    /// [`Self::transmittance`] with `tau` of the segment's direction given (looked up).
-    pub fn transmittance_with(&self, from: Vec3, to: Vec3, t: f32) -> f32 {
-        let Some((s0, s1)) = self.chord(from, to) else {
-            return 1.0;
-        };
-        let (a, b) = (s0.max(0.0), s1.min(1.0));
-        if a > b {
-            return 1.0;
+/// A world point in the frame `place` maps to world.
+fn local_point(place: &Similarity, x: Vec3) -> Vec3 {
+    place.rotation.conjugate() * (x - place.translation) / place.scale
+}
+
+/// The part of the line through `from` and `to` (world) inside the box `lo..hi` of the frame
+/// `place` maps to world, as parameters `(s0, s1)` (0 at `from`, 1 at `to`), or `None`.
+fn box_chord(lo: Vec3, hi: Vec3, place: &Similarity, from: Vec3, to: Vec3) -> Option<(f32, f32)> {
+    let (a, b) = (local_point(place, from), local_point(place, to));
+    let d = b - a;
+    let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return None;
+            }
+            continue;
         }
-        share_of(t, s0, s1, a, b)
+        let (mut ta, mut tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+        if ta > tb {
+            core::mem::swap(&mut ta, &mut tb);
+        }
+        t0 = t0.max(ta);
+        t1 = t1.min(tb);
     }
+    (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+}
+
+/// True when the segment `from..to` (world) runs through some of the box `lo..hi` placed by
+/// `place` (more than touching it).
+pub fn box_crossed(lo: Vec3, hi: Vec3, place: &Similarity, from: Vec3, to: Vec3) -> bool {
+    box_chord(lo, hi, place, from, to).is_some_and(|(s0, s1)| s0.max(0.0) < s1.min(1.0))
+}
+
+/// What the contents of the box `lo..hi` (placed by `place`) let through along the segment
+/// `from..to` when `tau` of its direction is `t` (see [`Placed::transmittance`]): for callers
+/// that know `t` and the box without the tables.
+pub fn box_transmittance(
+    lo: Vec3,
+    hi: Vec3,
+    place: &Similarity,
+    from: Vec3,
+    to: Vec3,
+    t: f32,
+) -> f32 {
+    let Some((s0, s1)) = box_chord(lo, hi, place, from, to) else {
+        return 1.0;
+    };
+    let (a, b) = (s0.max(0.0), s1.min(1.0));
+    if a > b {
+        return 1.0;
+    }
+    share_of(t, s0, s1, a, b)
 }
 
 /// `t` to the power of the share `(b - a) / (s1 - s0)` of a chord (see
