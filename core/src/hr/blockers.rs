@@ -114,6 +114,57 @@ pub(crate) fn transmittance_towards(
     t.max(0.0)
 }
 
+/// Most closed instances one gather ray reads along its way (the nearest).
+pub(crate) const MAX_ALONG: usize = 32;
+
+/// The light the closed instances along the segment `from..to` send back towards `from`,
+/// as radiosity (W/m^2 per band, `pi` times radiance: what a gather ray adds), nearer ones
+/// first, each behind what the nearer let through; `out` gets it added. Returns what they
+/// let through all together (the weight of whatever lies behind them).
+pub(crate) fn light_along(st: &State, ws: &[u8], from: Vec3, to: Vec3, out: &mut [f32]) -> f32 {
+    if st.instances == 0 {
+        return 1.0;
+    }
+    let d = (to - from).normalize_or_zero();
+    // (entry, transmittance, instance), sorted by entry.
+    let mut met: heapless::Vec<(f32, f32, u32), MAX_ALONG> = heapless::Vec::new();
+    bvh(st, ws).any_hit(from, to, |i| {
+        let (lo, hi, place) = placed_box(st, ws, i);
+        if !crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
+            return false;
+        }
+        let tau = st.placed(ws, i).tau(d);
+        let crossing = crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau);
+        if let Some((entry, t)) = crossing
+            && met.push((entry, t, i)).is_err()
+        {
+            return true;
+        }
+        false
+    });
+    met.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+    let mut through = 1.0f32;
+    for &(_, t, i) in &met {
+        let placed = st.placed(ws, i);
+        let shadow = placed.shadow(-d);
+        let received = crate::tables::closed::Received::over(&placed, st.received(ws, i));
+        if shadow > 0.0
+            && t < 1.0
+            && let Ok(r) = received
+        {
+            let w = through * (1.0 - t) * core::f32::consts::PI / shadow;
+            for (band, o) in out.iter_mut().enumerate() {
+                *o += w * r.intensity(&placed, -d, band);
+            }
+        }
+        through *= t;
+        if through <= 0.0 {
+            break;
+        }
+    }
+    through
+}
+
 /// Closed instance `i`'s original's box and its transform to world.
 fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity) {
     let leaf = st.instance(ws, i);

@@ -210,7 +210,15 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
         let mut c = [0.0f32; 8];
         cast += 1;
         let end = st.beyond(x, d);
-        if let Some((hit, t)) = vis.first_hit(x, end, [poly, NONE])
+        let first = vis.first_hit(x, end, [poly, NONE]);
+        // Closed instances on the way: their light, and what they let through to the rest.
+        let through = if st.instances > 0 {
+            let to = first.map_or(end, |(_, t)| x + (end - x) * t);
+            super::blockers::light_along(st, ws, x, to, &mut c[..nb])
+        } else {
+            1.0
+        };
+        if let Some((hit, t)) = first
             && hit < st.polygons
         {
             let y = x + (end - x) * t;
@@ -224,7 +232,7 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
                 if let Some(b) = st.b(ws, at, hside) {
                     for k in 0..nb {
                         let e = if em.apart() { m.emit[hside][k] } else { 0.0 };
-                        c[k] = (b[k] - e).max(0.0);
+                        c[k] += through * (b[k] - e).max(0.0);
                     }
                 }
             }

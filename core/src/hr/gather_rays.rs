@@ -22,9 +22,7 @@ const AUTO_MIN: u32 = 64;
 /// (points and directions are both stratified on a grid).
 pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
     let asked = st.settings.final_rays;
-    // A level with closed instances keeps the hierarchy's light: its final gather would
-    // need to read the instances' light along its rays (issue 18, not done yet).
-    if asked == 0 || st.instances > 0 {
+    if asked == 0 {
         return 0;
     }
     let n = if asked == super::settings::Settings::AUTO {

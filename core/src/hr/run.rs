@@ -248,7 +248,17 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             .map_err(SolveError::Sink)?;
         st.stats.rays += written.rays;
         st.stats.rays_by_phase.final_gather += written.rays;
-        if let Some(absorbed) = written.absorbed {
+        if let Some(mut absorbed) = written.absorbed {
+            // The closed instances' own, which no polygon of this level holds.
+            for i in 0..st.instances {
+                let placed = st.placed(ws, i);
+                let received = st.received(ws, i);
+                if let Ok(r) = crate::tables::closed::Received::over(&placed, received) {
+                    for (b, a) in absorbed.iter_mut().enumerate().take(st.bands) {
+                        *a += r.absorbed(b) as f64;
+                    }
+                }
+            }
             st.stats.balance.absorbed = absorbed;
         }
         Ok(st.stats)

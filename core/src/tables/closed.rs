@@ -159,6 +159,22 @@ fn box_chord(lo: Vec3, hi: Vec3, place: &Similarity, from: Vec3, to: Vec3) -> Op
     (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
 }
 
+/// Where the segment `from..to` (world) enters the box `lo..hi` placed by `place` (its
+/// parameter, 0 at `from`) and what the contents let through along it when `tau` of its
+/// direction is `t` (see [`Placed::transmittance`]); `None` when it does not run through.
+pub fn box_crossing(
+    lo: Vec3,
+    hi: Vec3,
+    place: &Similarity,
+    from: Vec3,
+    to: Vec3,
+    t: f32,
+) -> Option<(f32, f32)> {
+    let (s0, s1) = box_chord(lo, hi, place, from, to)?;
+    let (a, b) = (s0.max(0.0), s1.min(1.0));
+    (a < b).then(|| (a, share_of(t, s0, s1, a, b)))
+}
+
 /// True when the segment `from..to` (world) runs through some of the box `lo..hi` placed by
 /// `place` (more than touching it).
 pub fn box_crossed(lo: Vec3, hi: Vec3, place: &Similarity, from: Vec3, to: Vec3) -> bool {
