@@ -12,9 +12,10 @@ fuzz_target!(|data: &[u8]| {
     if let Ok(view) = SceneView::open(SliceSource(data)) {
         let scene = decompile(&view).expect("a validated image decompiles");
         for t in &scene.tables {
-            let tables =
-                OriginalTables::from_record("fuzz", t.original, 0, &t.record, &t.values, &t.visible)
-                    .expect("a validated image's tables are sound");
+            let tables = OriginalTables::from_record(
+                "fuzz", t.original, 0, &t.record, &t.values, &t.visible,
+            )
+            .expect("a validated image's tables are sound");
             let v = tables.view();
             // The core reads them from the record alone, as a solve with closed instances
             // does: the same tables.
