@@ -117,23 +117,7 @@ pub(crate) fn evaluate<V: Visibility + ?Sized>(
         return Coefficients::default();
     }
     if recv.kind() == super::ids::Kind::Instance || emit.kind() == super::ids::Kind::Instance {
-        // Its decisions come from an estimate of their own, as every link's.
-        let mut out = super::instance_kernel::evaluate(st, ws, recv, emit, vis, seed, rays);
-        let d = super::instance_kernel::evaluate(
-            st,
-            ws,
-            recv,
-            emit,
-            vis,
-            hash3(seed, 0xDEC1DE, 0x5EE),
-            rays.div_ceil(4),
-        );
-        out.open = d.open;
-        out.partial = d.partial;
-        out.spread = d.spread;
-        out.seen = d.k.iter().flatten().sum();
-        out.rays += d.rays;
-        return out;
+        return super::instance_kernel::evaluate(st, ws, recv, emit, vis, seed, rays);
     }
     let mut out = match shot(st, ws, recv, emit, seed, rays, vis) {
         Some(c) => c,

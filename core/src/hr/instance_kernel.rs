@@ -101,10 +101,40 @@ fn visible<V: Visibility + ?Sized>(
     seen / n as f32
 }
 
-/// The coefficients of link `recv <- emit` where either is a closed instance, from `seed`
-/// with `rays` rays per point.
-#[allow(clippy::too_many_arguments)]
+/// The coefficients of link `recv <- emit` where either is a closed instance, and what
+/// refinement decides by from an estimate of their own (as every link's, see
+/// `eval::evaluate`).
 pub(crate) fn evaluate<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    recv: Elem,
+    emit: Elem,
+    vis: &V,
+    seed: u32,
+    rays: u32,
+) -> Coefficients {
+    let mut out = estimate(st, ws, recv, emit, vis, seed, rays);
+    let d = estimate(
+        st,
+        ws,
+        recv,
+        emit,
+        vis,
+        hash3(seed, 0xDEC1DE, 0x5EE),
+        rays.div_ceil(4),
+    );
+    out.open = d.open;
+    out.partial = d.partial;
+    out.spread = d.spread;
+    out.seen = d.seen;
+    out.rays += d.rays;
+    out
+}
+
+/// One estimate of the coefficients of link `recv <- emit` from `seed` with `rays` rays per
+/// point.
+#[allow(clippy::too_many_arguments)]
+fn estimate<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
     recv: Elem,

@@ -6,6 +6,7 @@
 
 use super::census::Census;
 use super::error::HrError;
+use super::group::Item;
 use super::ids::{Elem, Kind};
 use super::layout::{FRAME_BYTES, GROUP_ITEM_BYTES, Layout};
 use super::pool::{Blocks, Pool, read, write};
@@ -37,16 +38,6 @@ struct Frame {
 }
 
 const _: () = assert!(core::mem::size_of::<Frame>() <= FRAME_BYTES);
-
-/// A child waiting to be grouped: its element and centroid.
-#[derive(Clone, Copy, Pod, Zeroable)]
-#[repr(C)]
-struct Item {
-    elem: u32,
-    centroid: [f32; 3],
-}
-
-const _: () = assert!(core::mem::size_of::<Item>() == GROUP_ITEM_BYTES);
 
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load<S: SceneSource>(
@@ -265,7 +256,7 @@ fn load_tree<S: SceneSource>(
         let child = f.next;
         let rec = view.node(NodeId(child))?;
         f.next = rec.subtree_end;
-        if closes(s, &rec) {
+        if super::load_instances::closes(s, &rec) {
             // A closed instance: its leaf was made with its parent's children.
             write(ws, at, &f);
             continue;
@@ -286,136 +277,6 @@ fn load_tree<S: SceneSource>(
         open_node(view, s, ws, node, cluster, t, depth)?;
     }
     Ok(())
-}
-
-/// True when node `rec`, a child of a loaded node, is an instance that stays closed.
-fn closes(s: &State, rec: &crate::image::NodeRecord) -> bool {
-    s.instancing == Instancing::Top && rec.instance().is_some()
-}
-
-/// Makes the leaf of closed instance node `node` under transform `t` (its parent's), its
-/// original's tables read into the workspace and checked the first time they are needed.
-fn add_instance<S: SceneSource>(
-    view: &SceneView<S>,
-    s: &mut State,
-    ws: &mut [u8],
-    node: u32,
-    t: &Similarity,
-) -> Result<Elem, HrError> {
-    let lay = s.lay;
-    let rec = view.node(NodeId(node))?;
-    let id = rec.instance().ok_or(HrError::SceneTooLarge)?;
-    let inst = view.instance(id)?;
-    let original = inst.original();
-    let place = t.compose(&inst.transform());
-    let slot = table_slot(view, s, ws, original.0)?;
-    let record = s.slot(ws, slot).record;
-    let i = s.instances;
-    if i >= lay.n_instances {
-        return Err(HrError::SceneTooLarge);
-    }
-    s.instances += 1;
-    // The direct light, then all the light (see `State::received`).
-    let received = 2 * received_floats(&record);
-    if s.received_floats + received > lay.n_received_floats() {
-        return Err(HrError::SceneTooLarge);
-    }
-    let bbox = place.aabb(&Aabb::new(record.lo.into(), record.hi.into()));
-    if !bbox.is_finite_nonempty() && bbox.min != bbox.max {
-        return Err(HrError::BadGeometry {
-            polygon: s.polygons as u64,
-        });
-    }
-    let leaf = InstanceLeaf {
-        rotation: place.rotation.to_array(),
-        translation: place.translation.to_array(),
-        scale: place.scale,
-        bbox_min: bbox.min.to_array(),
-        bbox_max: bbox.max.to_array(),
-        parent: NONE,
-        links: NONE,
-        slot,
-        received: s.received_floats as u32,
-        node,
-        area_ref: 0.0,
-    };
-    let at = lay.received + 4 * s.received_floats;
-    ws[at..at + 4 * received].fill(0);
-    s.received_floats += received;
-    s.set_instance(ws, i, &leaf);
-    // The mean cross-section over the sphere, times 4: the integral over pi.
-    let integral = s.placed(ws, i).tables().shadow_integral();
-    let mut leaf = leaf;
-    leaf.area_ref = place.scale * place.scale * integral / core::f32::consts::PI;
-    s.set_instance(ws, i, &leaf);
-    Ok(Elem::new(Kind::Instance, i))
-}
-
-/// Floats of the light an instance of the original of `record` receives.
-fn received_floats(record: &crate::image::TableRecord) -> usize {
-    crate::tables::closed::received_floats(
-        record.bands as usize,
-        record.scatterers as usize,
-        record.incoming_side as usize * record.incoming_side as usize,
-    )
-}
-
-/// The table slot of `original`: read from the image into the workspace and checked the
-/// first time.
-fn table_slot<S: SceneSource>(
-    view: &SceneView<S>,
-    s: &mut State,
-    ws: &mut [u8],
-    original: u32,
-) -> Result<u32, HrError> {
-    let lay = s.lay;
-    let map_at = lay.slot_map + 4 * original as usize;
-    let known: u32 = read(ws, map_at);
-    if known != NONE {
-        return Ok(known);
-    }
-    let record = view
-        .table_of(crate::OriginalId(original))?
-        .ok_or(HrError::NoTables { original })?;
-    let (floats, bytes) = (record.values() as usize, record.visible_bytes() as usize);
-    let values_at = lay.table_values + 4 * s.table_floats;
-    let visible_at = lay.table_visible + s.table_bytes;
-    if s.slots >= lay.n_slots()
-        || s.table_floats + floats > lay.n_table_floats()
-        || s.table_bytes + bytes > lay.n_table_bytes()
-    {
-        return Err(HrError::SceneTooLarge);
-    }
-    {
-        let values: &mut [f32] =
-            bytemuck::cast_slice_mut(&mut ws[values_at..values_at + 4 * floats]);
-        view.table_values(record.first, values)?;
-    }
-    view.table_visibility(
-        record.first_visible,
-        &mut ws[visible_at..visible_at + bytes],
-    )?;
-    {
-        let values: &[f32] = bytemuck::cast_slice(&ws[values_at..values_at + 4 * floats]);
-        let visible = &ws[visible_at..visible_at + bytes];
-        crate::tables::directional::DirectionalTables::from_record(&record, values, visible)
-            .map_err(|_| HrError::NoTables { original })?;
-    }
-    let slot = s.slots;
-    s.slots += 1;
-    s.table_floats += floats;
-    s.table_bytes += bytes;
-    write(
-        ws,
-        lay.slots + slot as usize * core::mem::size_of::<TableSlot>(),
-        &TableSlot {
-            record,
-            values: values_at as u64,
-            visible: visible_at as u64,
-        },
-    );
-    write(ws, map_at, &slot);
-    Ok(slot)
 }
 
 /// The tree node whose content stands for `node`, and the transform to world: an exact
@@ -485,8 +346,8 @@ fn open_node<S: SceneSource>(
     while j < rec.subtree_end {
         let c = view.node(NodeId(j))?;
         // A closed instance is a leaf at once; other nodes get clusters below.
-        let (elem, centre) = if closes(s, &c) {
-            let e = add_instance(view, s, ws, j, &t)?;
+        let (elem, centre) = if super::load_instances::closes(s, &c) {
+            let e = super::load_instances::add_instance(view, s, ws, j, &t)?;
             let leaf = s.instance(ws, e.index());
             let b = Aabb::new(leaf.bbox_min.into(), leaf.bbox_max.into());
             (e.0, b.center())
@@ -523,7 +384,7 @@ fn open_node<S: SceneSource>(
         it.elem = Elem::new(Kind::Cluster, c).0;
         write(ws, at, &it);
     }
-    group(s, ws, cluster, total, first_group, groups)?;
+    super::group::group(s, ws, cluster, total, first_group, groups)?;
     let f = Frame {
         next: node + 1,
         end: rec.subtree_end,
@@ -606,111 +467,6 @@ fn add_root_patch(
         }
     }
     Ok(e)
-}
-
-/// Writes the child lists of `cluster` and of the `groups` grouping clusters reserved from
-/// `first_group`, splitting the `total` items in the grouping scratch in halves along their
-/// widest axis until no cluster has more than `max_children` children. Deterministic: ties
-/// are broken by element id.
-fn group(
-    s: &mut State,
-    ws: &mut [u8],
-    cluster: u32,
-    total: u32,
-    first_group: u32,
-    groups: u32,
-) -> Result<(), HrError> {
-    let m = s.settings.max_children.max(2);
-    let lay = s.lay;
-    let mut next_group = first_group;
-    // (first item, count, cluster): ranges still to place.
-    let mut todo: heapless::Vec<(u32, u32, u32), 96> = heapless::Vec::new();
-    todo.push((0, total, cluster))
-        .map_err(|_| HrError::SceneTooLarge)?;
-    while let Some((first, count, owner)) = todo.pop() {
-        let items: &mut [Item] = bytemuck::cast_slice_mut(
-            &mut ws[lay.group + first as usize * GROUP_ITEM_BYTES
-                ..lay.group + (first + count) as usize * GROUP_ITEM_BYTES],
-        );
-        let mut entries: heapless::Vec<u32, 2> = heapless::Vec::new();
-        let direct = count <= m;
-        if !direct {
-            let mut b = Aabb::EMPTY;
-            for it in items.iter() {
-                b.include(it.centroid.into());
-            }
-            let ext = b.max - b.min;
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
-            } else {
-                2
-            };
-            let half = (count - count / 2) as usize;
-            items.select_nth_unstable_by(half.min(items.len() - 1), |a, b| {
-                a.centroid[axis]
-                    .total_cmp(&b.centroid[axis])
-                    .then(a.elem.cmp(&b.elem))
-            });
-            for (start, len) in [
-                (first, half as u32),
-                (first + half as u32, count - half as u32),
-            ] {
-                if len == 1 {
-                    let it: Item = read(ws, lay.group + start as usize * GROUP_ITEM_BYTES);
-                    let _ = entries.push(it.elem);
-                } else {
-                    if next_group >= first_group + groups {
-                        return Err(HrError::SceneTooLarge);
-                    }
-                    let g = next_group;
-                    next_group += 1;
-                    let _ = entries.push(Elem::new(Kind::Cluster, g).0);
-                    todo.push((start, len, g))
-                        .map_err(|_| HrError::SceneTooLarge)?;
-                }
-            }
-        }
-        // Write the owner's child list and re-parent its children.
-        let n = if direct { count } else { entries.len() as u32 };
-        let base = s.child_entries;
-        if base + n > s.lay.n_clusters + s.lay.n_polygons + s.lay.n_instances {
-            return Err(HrError::SceneTooLarge);
-        }
-        s.child_entries += n;
-        for k in 0..n {
-            let e = if direct {
-                let it: Item = read(ws, lay.group + (first + k) as usize * GROUP_ITEM_BYTES);
-                Elem(it.elem)
-            } else {
-                Elem(entries[k as usize])
-            };
-            write(ws, lay.children + 4 * (base + k) as usize, &e.0);
-            set_parent(s, ws, e, owner);
-        }
-        let mut c = s.cluster(ws, owner);
-        c.children = base;
-        c.child_count = n;
-        s.set_cluster(ws, owner, &c);
-    }
-    Ok(())
-}
-
-fn set_parent(s: &State, ws: &mut [u8], e: Elem, parent: u32) {
-    if e.kind() == Kind::Cluster {
-        let mut c = s.cluster(ws, e.index());
-        c.parent = parent;
-        s.set_cluster(ws, e.index(), &c);
-    } else if e.kind() == Kind::Instance {
-        let mut c = s.instance(ws, e.index());
-        c.parent = parent;
-        s.set_instance(ws, e.index(), &c);
-    } else {
-        let mut p = s.patch(ws, e);
-        p.parent = Elem::new(Kind::Cluster, parent).0;
-        s.set_patch(ws, e, &p);
-    }
 }
 
 /// Boxes, areas, polygon counts and emitted powers of clusters, children before parents.

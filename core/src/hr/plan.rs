@@ -41,34 +41,15 @@ pub fn plan<S: SceneSource>(
 ) -> Result<Plan, HrError> {
     settings.check()?;
     let c = census(view, settings.max_children, scratch)?;
-    plan_from(view, settings, internal_bvh, &c)
+    plan_level(view, settings, internal_bvh, &c, sources(view))
 }
 
 pub(super) fn sources<S: SceneSource>(view: &SceneView<S>) -> u32 {
     view.info().suns + view.info().sky
 }
 
-/// [`plan_from`] for a level lit by `sources` directional sources.
+/// The plan of a level of census `c` lit by `n_sources` directional sources.
 pub(super) fn plan_level<S: SceneSource>(
-    view: &SceneView<S>,
-    settings: &Settings,
-    internal: bool,
-    c: &Census,
-    sources: u32,
-) -> Result<Plan, HrError> {
-    plan_with(view, settings, internal, c, sources)
-}
-
-pub(super) fn plan_from<S: SceneSource>(
-    view: &SceneView<S>,
-    settings: &Settings,
-    internal: bool,
-    c: &Census,
-) -> Result<Plan, HrError> {
-    plan_with(view, settings, internal, c, sources(view))
-}
-
-fn plan_with<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     internal: bool,
@@ -77,20 +58,9 @@ fn plan_with<S: SceneSource>(
 ) -> Result<Plan, HrError> {
     let info = view.info();
     let bands = info.bands as usize;
-    let lay0 = Layout::new(
-        c,
-        info.materials,
-        info.originals,
-        n_sources,
-        bands,
-        settings,
-        internal,
-        usize::MAX / 4,
-    )
-    .ok_or(HrError::SceneTooLarge)?;
-    let st = lay0.strides;
-    let fits = |total: u64| -> bool {
-        let Some(lay) = Layout::new(
+    // The layout of a workspace of `total` bytes.
+    let layout = |total: usize| {
+        Layout::new(
             c,
             info.materials,
             info.originals,
@@ -98,8 +68,13 @@ fn plan_with<S: SceneSource>(
             bands,
             settings,
             internal,
-            total as usize,
-        ) else {
+            total,
+        )
+    };
+    let lay0 = layout(usize::MAX / 4).ok_or(HrError::SceneTooLarge)?;
+    let st = lay0.strides;
+    let fits = |total: u64| -> bool {
+        let Some(lay) = layout(total as usize) else {
             return false;
         };
         let per = |stride: usize| (lay.block_size / stride) as u64;
@@ -153,17 +128,7 @@ fn plan_with<S: SceneSource>(
     let suggested = (min_bytes as f64 + grow * 1.05)
         .max(16.0 * 1024.0 * 1024.0)
         .min(u64::MAX as f64 / 2.0) as u64;
-    let at_min = Layout::new(
-        c,
-        info.materials,
-        info.originals,
-        n_sources,
-        bands,
-        settings,
-        internal,
-        min_bytes as usize,
-    )
-    .ok_or(HrError::SceneTooLarge)?;
+    let at_min = layout(min_bytes as usize).ok_or(HrError::SceneTooLarge)?;
     Ok(Plan {
         census: *c,
         static_bytes: at_min.static_bytes as u64,
