@@ -1,6 +1,7 @@
 //! Closed instances as blockers (DESIGN.md "Instances inside a level"): a ray that crosses a
-//! closed instance's box goes on with the weight `tau` of its direction, the uncollided
-//! transmittance of the contents. A small BVH over the instances' world boxes, built in the
+//! closed instance's box meets its original's own polygons, placed, when the original is
+//! small enough (see `original_geometry`), else goes on with the weight `tau` of its
+//! direction, the uncollided transmittance of the contents. A small BVH over the instances' world boxes, built in the
 //! workspace when the level is loaded, finds the boxes a segment may cross; each candidate
 //! is tested against its placed (oriented) box.
 
@@ -104,10 +105,18 @@ pub(crate) fn transmittance_towards(
         if skip.contains(&(SKIP_INSTANCE | i)) {
             return false;
         }
+        let (lo, hi, place, slot) = placed_box(st, ws, i);
+        if let Some(g) = st.original_geometry(ws, slot) {
+            if crate::tables::closed::box_crossed(lo, hi, &place, from, to)
+                && g.blocks(&place, from, to)
+            {
+                t = 0.0;
+            }
+            return t <= 0.0;
+        }
         let at = st.lay.source_tau + 4 * (i as usize * st.sources as usize + k as usize);
         let tau: f32 = super::pool::read(ws, at);
         // The box and the transform alone: the tau is known.
-        let (lo, hi, place) = placed_box(st, ws, i);
         t *= crate::tables::closed::box_transmittance(lo, hi, &place, from, to, tau);
         t <= 0.0
     });
@@ -129,9 +138,15 @@ pub(crate) fn light_along(st: &State, ws: &[u8], from: Vec3, to: Vec3, out: &mut
     // (entry, transmittance, instance), sorted by entry.
     let mut met: heapless::Vec<(f32, f32, u32), MAX_ALONG> = heapless::Vec::new();
     bvh(st, ws).any_hit(from, to, |i| {
-        let (lo, hi, place) = placed_box(st, ws, i);
+        let (lo, hi, place, slot) = placed_box(st, ws, i);
         if !crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
             return false;
+        }
+        if let Some(g) = st.original_geometry(ws, slot) {
+            // Its own polygons: the light of the first one met, nothing through it.
+            return g
+                .first_hit(&place, from, to)
+                .is_some_and(|entry| met.push((entry, 0.0, i)).is_err());
         }
         let tau = st.placed(ws, i).tau(d);
         let crossing = crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau);
@@ -165,8 +180,8 @@ pub(crate) fn light_along(st: &State, ws: &[u8], from: Vec3, to: Vec3, out: &mut
     through
 }
 
-/// Closed instance `i`'s original's box and its transform to world.
-fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity) {
+/// Closed instance `i`'s original's box, its transform to world and its table slot.
+fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity, u32) {
     let leaf = st.instance(ws, i);
     let r = st.slot(ws, leaf.slot).record;
     let place = crate::geometry::Similarity {
@@ -174,7 +189,7 @@ fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Si
         translation: leaf.translation.into(),
         scale: leaf.scale,
     };
-    (Vec3::from(r.lo), Vec3::from(r.hi), place)
+    (Vec3::from(r.lo), Vec3::from(r.hi), place, leaf.slot)
 }
 
 /// The BVH over the level's closed instances (empty without).
@@ -205,9 +220,13 @@ pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [
             return false;
         }
         // The box first: the tables only for a segment that crosses it.
-        let (lo, hi, place) = placed_box(st, ws, i);
+        let (lo, hi, place, slot) = placed_box(st, ws, i);
         if crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
-            t *= st.placed(ws, i).transmittance(from, to);
+            t *= match st.original_geometry(ws, slot) {
+                Some(g) if g.blocks(&place, from, to) => 0.0,
+                Some(_) => 1.0,
+                None => st.placed(ws, i).transmittance(from, to),
+            };
         }
         t <= 0.0
     });

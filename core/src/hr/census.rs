@@ -40,6 +40,9 @@ pub struct Census {
     pub closed_originals: u32,
     /// Zero.
     pub reserved: u32,
+    /// Bytes of the originals whose closed instances block with their own polygons (see
+    /// `Settings::blocking_polygons`), each once.
+    pub blocking_bytes: u64,
 }
 
 impl Census {
@@ -114,21 +117,24 @@ pub fn census<S: SceneSource>(
     max_children: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
-    census_level(view, max_children, Instancing::None, scratch)
+    census_level(view, max_children, Instancing::None, 0, scratch)
 }
 
-/// Counts the scene as a solve with `instancing` loads it. `scratch` must hold
-/// [`census_scratch_bytes`].
+/// Counts the scene as a solve with `instancing` loads it, closed instances of originals
+/// of at most `blocking_polygons` polygons blocking with them (see
+/// `Settings::blocking_polygons`). `scratch` must hold [`census_scratch_bytes`].
 pub fn census_level<S: SceneSource>(
     view: &SceneView<S>,
     max_children: u32,
     instancing: Instancing,
+    blocking_polygons: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
     census_at(
         view,
         max_children,
         instancing,
+        blocking_polygons,
         view.info().scene_root.0,
         scratch,
     )
@@ -140,6 +146,7 @@ pub(crate) fn census_at<S: SceneSource>(
     view: &SceneView<S>,
     max_children: u32,
     instancing: Instancing,
+    blocking_polygons: u32,
     root: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
@@ -190,6 +197,12 @@ pub(crate) fn census_at<S: SceneSource>(
             .table_bytes
             .checked_add(t.visible_bytes())
             .ok_or(HrError::SceneTooLarge)?;
+        if let Some(n) = super::original_geometry::blocking_polygons(view, k, blocking_polygons)? {
+            c.blocking_bytes = c
+                .blocking_bytes
+                .checked_add(super::original_geometry::bytes_needed(n) as u64)
+                .ok_or(HrError::SceneTooLarge)?;
+        }
     }
     Ok(c)
 }

@@ -194,12 +194,24 @@ pub(crate) fn box_form_factor(x: Vec3, n: Vec3, min: Vec3, max: Vec3) -> f32 {
     sum.min(1.0)
 }
 
-/// Where a point receives: on one side (the plane's normal), or on the sides of the polygon
-/// it lies on (its normal and how many sides it has).
+/// The solid angle of a box seen from the outside point `x`, over pi (its fluence factor:
+/// at most 4).
+pub(crate) fn box_fluence(x: Vec3, min: Vec3, max: Vec3) -> f32 {
+    let mut sum = 0.0f32;
+    box_faces(x, min, max, |c| sum += point_polygon_light(x, c).0);
+    (sum / PI).min(4.0)
+}
+
+/// Where a point receives: on one side (the plane's normal), on the sides of the polygon
+/// it lies on (its normal and how many sides it has), or from every direction alike (a
+/// closed instance: what it intercepts from a direction is the light's flux density
+/// across that direction times its cross-section there, so a polygon brings its solid
+/// angle over pi, the fluence, not its cosine-weighted form factor).
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Plane {
     Facing(Vec3),
     Sides(Vec3, usize),
+    Sphere,
 }
 
 /// Two polygon sides drawn among the samples of a gathered link, each with probability its
@@ -259,7 +271,7 @@ pub(crate) fn gathered<V: Visibility + ?Sized>(
     let nr = match plane {
         Plane::Facing(n) => Some(n),
         Plane::Sides(n, 1) => Some(n),
-        Plane::Sides(..) => None,
+        Plane::Sides(..) | Plane::Sphere => None,
     };
     let n = rays.max(1);
     let (mut sum, mut dir, mut open) = (0.0f32, Vec3::ZERO, 0.0f32);
@@ -401,9 +413,22 @@ fn guess(st: &State, ws: &[u8], e: Elem, x: Vec3, plane: Plane) -> f32 {
     if a <= 0.0 {
         return 0.0;
     }
+    if let Plane::Sphere = plane {
+        // The solid angle of its box (a polygon's own, exact): a flat cluster of tiles seen
+        // at a grazing angle covers far less than its area over the squared distance.
+        if polygon {
+            return polygon_value(st, ws, e, x, plane).map_or(0.0, |(v, _, _)| v);
+        }
+        return if outside(x, lo, hi) {
+            box_fluence(x, lo, hi).max(f32::MIN_POSITIVE)
+        } else {
+            4.0
+        };
+    }
     let (n, both) = match plane {
         Plane::Facing(n) | Plane::Sides(n, 1) => (n, false),
         Plane::Sides(n, _) => (n, true),
+        Plane::Sphere => return 0.0,
     };
     // The box corner farthest along the normal: nothing when it lies behind the plane.
     let far = Vec3::new(
@@ -469,6 +494,7 @@ fn polygon_value(
         Plane::Sides(n, _) => {
             point_polygon(x, n, &corners[..m]) + point_polygon(x, -n, &corners[..m])
         }
+        Plane::Sphere => point_polygon_light(x, &corners[..m]).0 / PI,
     };
     (value.is_finite() && value > 0.0).then_some((value, side, (corners, m)))
 }

@@ -6,10 +6,13 @@
 //!   area `A` (`A = 4` x the mean cross-section `(1 - tau) A_box` over the sphere):
 //!   `A cos / (4 pi r^2 + A)`, and carry the radiosity `4 pi I(o) / A`
 //!   ([`carried_radiosity`]), so that a receiver far away gets `I(o) cos / r^2`.
-//! * **As a receiver** it takes the flux density on a plane facing the emitter at its
-//!   centre (W/m^2), which it keeps, with the direction it comes from, as a beam of its
-//!   received light (see `tables::closed`): what it intercepts is that times its
-//!   cross-section towards the emitter.
+//! * **As a receiver** it takes the fluence at its centre (W/m^2: the flux density across
+//!   each direction the emitter covers, summed, which for a small emitter is the
+//!   irradiance on a plane facing it), which it keeps as beams of its received light (see
+//!   `tables::closed`) spread over the cone of directions the emitter covers (the link's
+//!   direction is the light's mean direction, as long as it is collimated; see
+//!   `instance_light::cone_directions`): what it intercepts is each beam's flux density
+//!   times its cross-section that way.
 //!
 //! Visibility is the mean transmittance of rays between points of the two elements, drawn
 //! in the instance's placed box; the instance itself does not block its own rays (its
@@ -20,7 +23,7 @@ use super::cluster_kernel::{Plane, gathered};
 use super::eval::Coefficients;
 use super::ids::{Elem, Kind};
 use super::state::{Shape, State};
-use crate::formfactor::{facing_side, point_polygon};
+use crate::formfactor::facing_side;
 use crate::limits::NONE;
 use crate::sampling::{MAX_QUADRATURE, hash3, point_on, quadrature, unit2};
 use crate::visibility::Visibility;
@@ -299,8 +302,11 @@ fn into_instance<V: Visibility + ?Sized>(
                 centre += p;
             }
             let w = (centre / n as f32 - c).normalize_or_zero();
-            // Irradiance on a plane at the centre facing the patch, per unit radiosity.
-            let f = point_polygon(c, w, corners);
+            // The fluence at the centre per unit radiosity (its solid angle over pi): what
+            // the instance intercepts from every direction the patch covers, not only the
+            // cosine-weighted part on a plane facing it.
+            let (omega, phi) = crate::formfactor::point_polygon_light(c, corners);
+            let f = omega / PI;
             if f <= 0.0 {
                 return;
             }
@@ -316,16 +322,20 @@ fn into_instance<V: Visibility + ?Sized>(
             out.open = f;
             out.k[0][s] = f * v;
             out.partial = v < 1.0;
-            out.dir = w;
+            // Towards the patch, as long as its light is collimated (see
+            // `instance_light::cone_directions`).
+            out.dir = if omega > 0.0 { phi * (PI / omega) } else { w };
         }
         Shape::Cluster { min, max, .. } => {
             let w = ((min + max) * 0.5 - c).normalize_or_zero();
-            let (k, _, open, wit) = gathered(
+            // The fluence at the centre: from every side (a cluster around or below the
+            // instance is not cut in half by a plane facing its centre).
+            let (k, towards, open, wit) = gathered(
                 st,
                 ws,
                 emit,
                 c,
-                Plane::Facing(w),
+                Plane::Sphere,
                 SKIP_INSTANCE | i,
                 hash3(seed, 0x4E, 1),
                 rays.max(4),
@@ -338,7 +348,12 @@ fn into_instance<V: Visibility + ?Sized>(
             out.partial = k < open;
             out.exact = true;
             out.witness = wit.pick;
-            out.dir = w;
+            // The light's mean direction, as long as it is collimated.
+            out.dir = if towards.length_squared() > 0.0 {
+                towards
+            } else {
+                w
+            };
         }
         Shape::Instance { .. } | Shape::Source { .. } => {}
     }

@@ -140,8 +140,8 @@ pub(crate) fn start_from_direct(st: &State, ws: &mut [u8]) {
 }
 
 /// The light every closed instance receives through its links, added to its direct light
-/// as beams (each link's flux density on a plane facing its emitter, from the link's
-/// direction; see `instance_kernel`). Returns the largest change of an instance's mean
+/// as beams (each link's fluence spread over its cone, see [`cone_directions`] and
+/// `instance_kernel`). Returns the largest change of an instance's mean
 /// radiosity (W/m^2, see `instance_kernel::mean_radiosity`) and the largest such radiosity,
 /// which the solution's convergence test takes with the patches'.
 pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
@@ -157,8 +157,18 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
             let l = st.link(ws, cur);
             let mut s = [0.0f32; crate::limits::MAX_BANDS];
             link_flux(st, ws, cur, at, kk, &mut s[..nb]);
-            let dir = Vec3::from(l.dir);
-            st.with_received(ws, i, 1, |placed, r| r.receive(placed, dir, &s[..nb]));
+            let mut dirs = [Vec3::ZERO; MAX_CONE];
+            let m = cone_directions(Vec3::from(l.dir), &mut dirs);
+            if m > 0 {
+                for v in &mut s[..nb] {
+                    *v /= m as f32;
+                }
+                st.with_received(ws, i, 1, |placed, r| {
+                    for &d in &dirs[..m] {
+                        r.receive(placed, d, &s[..nb]);
+                    }
+                });
+            }
             cur = l.next;
         }
         let after = super::instance_kernel::mean_radiosity(st, ws, i);
@@ -208,4 +218,43 @@ fn start_one(st: &State, ws: &mut [u8], i: u32) {
     let (a, n) = st.received_at(ws, i, 0);
     let (b, _) = st.received_at(ws, i, 1);
     ws.copy_within(a..a + 4 * n, b);
+}
+
+/// Most directions a link's light is spread over (see [`cone_directions`]).
+pub(crate) const MAX_CONE: usize = 16;
+
+/// Solid angle each direction of a spread cone stands for, at most (sr).
+const CONE_CELL: f32 = 0.4;
+
+/// The directions, each with an equal share, over which light of mean direction `dir`
+/// reaches a closed instance (its length is the light's collimation `c`, as
+/// `cluster_kernel::gathered` gives it): a uniform cone of half-angle `acos(2c - 1)` around
+/// it (the soil under a plant sends light from a whole hemisphere, `c = 1/2`, which from its
+/// mean direction alone would miss every vertical stem). Points of a Fibonacci spiral over
+/// the cap, one per [`CONE_CELL`] of its solid angle, at most [`MAX_CONE`]; the axis alone
+/// for nearly collimated light. Returns how many (0 without a direction).
+pub(crate) fn cone_directions(dir: Vec3, out: &mut [Vec3; MAX_CONE]) -> usize {
+    let len = dir.length();
+    if !(len.is_finite() && len > 0.0) {
+        return 0;
+    }
+    let axis = dir / len;
+    let c = len.min(1.0);
+    let cos_a = (2.0 * c - 1.0).max(-1.0);
+    let omega = 2.0 * core::f32::consts::PI * (1.0 - cos_a);
+    let m = (libm::ceilf(omega / CONE_CELL) as usize).clamp(1, MAX_CONE);
+    if m == 1 {
+        out[0] = axis;
+        return 1;
+    }
+    let (u, v) = axis.any_orthonormal_pair();
+    // The golden angle (rad).
+    const GOLDEN: f32 = 2.399_963;
+    for (j, o) in out.iter_mut().enumerate().take(m) {
+        let z = 1.0 - (j as f32 + 0.5) / m as f32 * (1.0 - cos_a);
+        let r = libm::sqrtf((1.0 - z * z).max(0.0));
+        let phi = GOLDEN * j as f32;
+        *o = (axis * z + (u * libm::cosf(phi) + v * libm::sinf(phi)) * r).normalize();
+    }
+    m
 }

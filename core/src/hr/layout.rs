@@ -16,7 +16,7 @@ pub(crate) const POOLS: usize = 4;
 /// Alignment of every region (bytes).
 pub(crate) const ALIGN: usize = 16;
 
-fn up(x: usize) -> usize {
+pub(crate) fn up(x: usize) -> usize {
     x.div_ceil(ALIGN) * ALIGN
 }
 
@@ -132,6 +132,10 @@ pub(crate) struct Layout {
     pub table_values: usize,
     pub table_visible: usize,
     pub table_bytes_end: usize,
+    /// The polygons and BVHs of the originals whose closed instances block with them (see
+    /// `original_geometry`), and its end.
+    pub blocking: usize,
+    pub blocking_end: usize,
     /// The BVH over the closed instances' boxes (see `blockers`).
     pub closed_bvh: usize,
     /// Per closed instance and source, `tau` towards the source (see `blockers`).
@@ -224,6 +228,8 @@ impl Layout {
         let table_values_at = region(usize::try_from(census.table_floats).ok()?.checked_mul(4)?)?;
         let table_visible_at = region(usize::try_from(census.table_bytes).ok()?)?;
         let table_bytes_end = region(0)?;
+        let blocking_at = region(usize::try_from(census.blocking_bytes).ok()?)?;
+        let blocking_end = region(0)?;
         let closed_bvh_at = region(super::blockers::bytes_needed(n_instances))?;
         let source_tau_at = region(
             (n_instances as usize)
@@ -296,6 +302,8 @@ impl Layout {
             table_values: table_values_at,
             table_visible: table_visible_at,
             table_bytes_end,
+            blocking: blocking_at,
+            blocking_end,
             closed_bvh: closed_bvh_at,
             source_tau: source_tau_at,
             n_clusters,

@@ -132,7 +132,13 @@ pub fn load_level<S: SceneSource>(
             needed: need as u64,
         });
     }
-    let c = census_level(view, settings.max_children, instancing, &mut ws[..need])?;
+    let c = census_level(
+        view,
+        settings.max_children,
+        instancing,
+        settings.blocking_polygons,
+        &mut ws[..need],
+    )?;
     let info = view.info();
     let lay = Layout::new(
         &c,

@@ -126,6 +126,25 @@ fn table_slot<S: SceneSource>(
         crate::tables::directional::DirectionalTables::from_record(&record, values, visible)
             .map_err(|_| HrError::NoTables { original })?;
     }
+    // Its own polygons, when its instances block with them.
+    let blocking_at = lay.blocking + s.blocking_bytes;
+    let blocking_polygons = match super::original_geometry::blocking_polygons(
+        view,
+        original,
+        s.settings.blocking_polygons,
+    )? {
+        Some(n) => {
+            let bytes = super::original_geometry::bytes_needed(n);
+            if blocking_at + bytes > lay.blocking_end {
+                return Err(HrError::SceneTooLarge);
+            }
+            let region = &mut ws[blocking_at..blocking_at + bytes];
+            super::original_geometry::load(view, region, original, n)?;
+            s.blocking_bytes += bytes;
+            n
+        }
+        None => 0,
+    };
     let slot = s.slots;
     s.slots += 1;
     s.table_floats += floats;
@@ -137,6 +156,9 @@ fn table_slot<S: SceneSource>(
             record,
             values: values_at as u64,
             visible: visible_at as u64,
+            blocking: blocking_at as u64,
+            blocking_polygons,
+            reserved: 0,
         },
     );
     write(ws, map_at, &slot);

@@ -41,6 +41,7 @@ mod load;
 mod load_instances;
 mod open;
 mod oriented;
+mod original_geometry;
 mod output;
 mod pending;
 mod plan;

@@ -393,12 +393,14 @@ fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<
             st.lay.strides.link_k,
             &mut s[..nb],
         );
-        let d = Vec3::from(l.dir);
-        if d != Vec3::ZERO {
+        // Spread over the cone its emitter covers (see `instance_light::cone_directions`).
+        let mut dirs = [Vec3::ZERO; super::instance_light::MAX_CONE];
+        let m = super::instance_light::cone_directions(Vec3::from(l.dir), &mut dirs);
+        for &d in &dirs[..m] {
             let c = grid.cell_of(d) as usize;
-            let w = s[..nb].iter().copied().fold(0.0f32, f32::max);
+            let w = s[..nb].iter().copied().fold(0.0f32, f32::max) / m as f32;
             for (a, v) in sum[c].iter_mut().zip(&s[..nb]) {
-                *a += v;
+                *a += v / m as f32;
             }
             dir[c] += d * w;
         }

@@ -144,13 +144,20 @@ pub(crate) struct InstanceLeaf {
 }
 
 /// The tables of one original with closed instances, read into the workspace: its record
-/// and where its values (f32) and visible fractions (bytes) lie (byte offsets).
+/// and where its values (f32) and visible fractions (bytes) lie (byte offsets); and where
+/// its own polygons lie when its instances block with them (see `original_geometry`).
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 #[repr(C)]
 pub(crate) struct TableSlot {
     pub record: crate::image::TableRecord,
     pub values: u64,
     pub visible: u64,
+    /// Byte offset of its polygons' region, when `blocking_polygons > 0`.
+    pub blocking: u64,
+    /// Its polygons, or 0 when its instances block by `tau`.
+    pub blocking_polygons: u32,
+    /// Zero.
+    pub reserved: u32,
 }
 
 /// A directional source: a sun or one sky direction.

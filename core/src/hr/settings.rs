@@ -54,6 +54,13 @@ pub struct Settings {
     /// lights one side at a time to learn how an original scatters the light that falls on
     /// the fronts and on the backs of its leaves, which reflect differently.
     pub sun_sides: u8,
+    /// Closed instances whose original has at most this many polygons (once expanded) block
+    /// rays with the original's own polygons, placed (a two-level BVH, as ray tracers
+    /// instance), so that their shadows are the contents' own; larger ones block as a
+    /// medium, by the transmittance `tau` of the ray's direction. 0: every closed instance
+    /// blocks by `tau`. Costs about 90 bytes per polygon of each such original, once per
+    /// level.
+    pub blocking_polygons: u32,
 }
 
 /// Most final gather passes.
@@ -66,6 +73,8 @@ impl Settings {
     pub const BOTH_SIDES: u8 = 3;
     /// Most final gather rays per side one may ask for.
     pub const MAX_FINAL_RAYS: u32 = 1 << 20;
+    /// Default of [`Settings::blocking_polygons`].
+    pub const BLOCKING_POLYGONS: u32 = 16_384;
 
     /// Checks every setting's range.
     pub fn check(&self) -> Result<(), HrError> {
@@ -120,6 +129,7 @@ impl Default for Settings {
             final_rays: Settings::AUTO,
             final_passes: Settings::AUTO,
             sun_sides: Settings::BOTH_SIDES,
+            blocking_polygons: Settings::BLOCKING_POLYGONS,
         }
     }
 }

@@ -78,6 +78,8 @@ pub(crate) struct State {
     pub table_floats: usize,
     pub table_bytes: usize,
     pub received_floats: usize,
+    /// Bytes of the blocking region used (see `original_geometry`).
+    pub blocking_bytes: usize,
     /// The last gather's largest change of a closed instance's mean radiosity and the
     /// largest such radiosity (W/m^2; see `instance_light::gather_instances`).
     pub instance_change: (f32, f32),
@@ -426,6 +428,23 @@ impl State {
         read(
             ws,
             self.lay.slots + k as usize * core::mem::size_of::<TableSlot>(),
+        )
+    }
+
+    /// Closed instance `i`'s original's own polygons, when it blocks with them (see
+    /// `original_geometry`).
+    pub(crate) fn original_geometry<'a>(
+        &self,
+        ws: &'a [u8],
+        slot: u32,
+    ) -> Option<super::original_geometry::OriginalGeometry<'a>> {
+        let s = self.slot(ws, slot);
+        if s.blocking_polygons == 0 {
+            return None;
+        }
+        super::original_geometry::OriginalGeometry::over(
+            ws.get(s.blocking as usize..self.lay.blocking_end)?,
+            s.blocking_polygons,
         )
     }
 

@@ -132,7 +132,7 @@ impl<'a> Placed<'a> {
 }
 
 /// A world point in the frame `place` maps to world.
-fn local_point(place: &Similarity, x: Vec3) -> Vec3 {
+pub(crate) fn local_point(place: &Similarity, x: Vec3) -> Vec3 {
     place.rotation.conjugate() * (x - place.translation) / place.scale
 }
 

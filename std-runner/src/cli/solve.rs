@@ -106,6 +106,12 @@ pub struct Args {
     #[arg(long, default_value_t = Settings::default().rays,
           value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub rays: u32,
+    /// Closed instances (hi) whose original has at most this many polygons, once expanded,
+    /// block rays with the original's own polygons (their shadows are the contents' own, at
+    /// about 90 bytes of workspace per polygon of each such original); larger ones block as
+    /// a medium, by their tables' transmittance. 0: all by transmittance.
+    #[arg(long, default_value_t = Settings::BLOCKING_POLYGONS)]
+    pub blocking_polygons: u32,
     /// Final gather (hr): rays per receiving side of every polygon, from which each polygon
     /// takes its own light; `auto` spreads about a million rays over the scene (64 to 16384
     /// per side), `0` keeps the hierarchy's irradiance (faster, right on average only).
@@ -389,6 +395,7 @@ pub fn run(a: Args) -> Result<()> {
             max_imbalance_percent: Some(a.max_imbalance),
             memory_bytes: if hr { a.memory } else { None },
             visibility: hr.then(|| format!("{:?}", a.visibility).to_lowercase()),
+            blocking_polygons: (a.method == Method::Hi).then_some(a.blocking_polygons),
             elements: (!hr).then_some(a.elements),
             threads: a.threads.map(u32::from),
             image: image_settings,
@@ -421,6 +428,7 @@ pub fn run(a: Args) -> Result<()> {
                 min_area: a.min_area,
                 tolerance: a.tolerance,
                 max_iterations: a.max_iterations,
+                blocking_polygons: a.blocking_polygons,
                 ..Settings::default()
             };
             let run = if a.method == Method::Hi {

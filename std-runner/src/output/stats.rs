@@ -69,6 +69,10 @@ pub struct RunSettings {
     pub memory_bytes: Option<u64>,
     /// `--visibility` (hr): the ray caster, `obvhs` or `core`.
     pub visibility: Option<String>,
+    /// `--blocking-polygons` (hi): closed instances of originals of at most this many
+    /// polygons block with them, larger ones by `tau`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blocking_polygons: Option<u32>,
     /// `--elements` (exact): element budget.
     pub elements: Option<u64>,
     /// `--threads` asked; `null` for every core.

@@ -22,6 +22,7 @@ fn report() -> SolveReport {
             max_imbalance_percent: Some(5.0),
             memory_bytes: None,
             visibility: Some("obvhs".into()),
+            blocking_polygons: None,
             elements: None,
             threads: Some(4),
             image: Some(ImageSettings {
