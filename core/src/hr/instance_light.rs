@@ -148,6 +148,8 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
     let nb = st.bands;
     let kk = st.lay.strides.link_k;
     let (mut change, mut largest) = (0.0f32, 0.0f32);
+    // What the instances send each other, from the light they hold now.
+    super::exchange::gather(st, ws);
     for i in 0..st.instances {
         let before = super::instance_kernel::mean_radiosity(st, ws, i);
         start_one(st, ws, i);
@@ -171,6 +173,7 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
             }
             cur = l.next;
         }
+        super::exchange::receive(st, ws, i, 1);
         let after = super::instance_kernel::mean_radiosity(st, ws, i);
         change = change.max((after - before).abs());
         largest = largest.max(after);

@@ -140,6 +140,8 @@ pub(crate) struct Layout {
     pub closed_bvh: usize,
     /// Per closed instance and source, `tau` towards the source (see `blockers`).
     pub source_tau: usize,
+    /// The light between closed instances (see `exchange`).
+    pub exchange: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
@@ -236,6 +238,7 @@ impl Layout {
                 .checked_mul(sources as usize)?
                 .checked_mul(4)?,
         )?;
+        let exchange_at = region(super::exchange::bytes_needed(n_instances, bands))?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -306,6 +309,7 @@ impl Layout {
             blocking_end,
             closed_bvh: closed_bvh_at,
             source_tau: source_tau_at,
+            exchange: exchange_at,
             n_clusters,
             n_polygons,
             n_instances,

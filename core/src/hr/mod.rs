@@ -28,6 +28,7 @@ mod direct;
 mod emitter_tree;
 mod error;
 mod eval;
+mod exchange;
 mod exec;
 mod final_gather;
 mod gather_rays;

@@ -406,6 +406,15 @@ fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<
         }
         cur = l.next;
     }
+    // The light of the level's other closed instances (see `exchange`).
+    super::exchange::beams(st, ws, leaf, |d, e| {
+        let c = grid.cell_of(d) as usize;
+        let w = e.iter().copied().fold(0.0f32, f32::max);
+        for (a, v) in sum[c].iter_mut().zip(e) {
+            *a += v;
+        }
+        dir[c] += d * w;
+    });
     for c in 0..cells {
         if sum[c][..nb].iter().all(|&v| v <= 0.0) {
             continue;

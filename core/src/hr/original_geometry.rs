@@ -6,7 +6,9 @@
 //! alone would shade like a uniform medium.
 //!
 //! Storage, from a region's first byte: the corners (12 floats per polygon, in the
-//! original's frame, m), the corner counts (one byte each), the BVH's nodes and its order.
+//! original's frame, m), the corner counts (one byte each: the count, and [`TWO_SIDED`]),
+//! the polygons' areas summed in order (m^2, for drawing points by area, see
+//! [`OriginalGeometry::sample`]), the BVH's nodes and its order.
 
 use super::error::HrError;
 use super::layout::up;
@@ -28,20 +30,24 @@ pub(crate) fn blocking_polygons<S: SceneSource>(
     Ok((n > 0 && n <= limit as u64).then_some(n as u32))
 }
 
+/// A count byte's flag: the polygon's material is two-sided.
+const TWO_SIDED: u8 = 0x10;
+
 /// Byte offsets of the parts of a region holding `n` polygons, from its start: corners,
-/// counts, BVH nodes, BVH order, end.
-fn parts(n: u32) -> [usize; 5] {
+/// counts, summed areas, BVH nodes, BVH order, end.
+fn parts(n: u32) -> [usize; 6] {
     let corners = 0;
     let counts = corners + up(48 * n as usize);
-    let nodes = counts + up(n as usize);
+    let areas = counts + up(n as usize);
+    let nodes = areas + up(4 * n as usize);
     let order = nodes + up(crate::bvh::nodes_needed(n) * core::mem::size_of::<BvhNode>());
     let end = order + up(4 * n as usize);
-    [corners, counts, nodes, order, end]
+    [corners, counts, areas, nodes, order, end]
 }
 
 /// Bytes of the region of an original of `n` polygons.
 pub(crate) fn bytes_needed(n: u32) -> usize {
-    parts(n)[4]
+    parts(n)[5]
 }
 
 /// A node range still to walk and the transform of its nodes to the original's frame.
@@ -61,10 +67,11 @@ pub(crate) fn load<S: SceneSource>(
     n: u32,
 ) -> Result<(), HrError> {
     let p = parts(n);
-    if region.len() < p[4] {
+    if region.len() < p[5] {
         return Err(HrError::SceneTooLarge);
     }
-    let (head, tail) = region.split_at_mut(p[2]);
+    let (head, tail) = region.split_at_mut(p[3]);
+    let (head, area_bytes) = head.split_at_mut(p[2]);
     let (corner_bytes, count_bytes) = head.split_at_mut(p[1]);
     let corners: &mut [f32] = bytemuck::try_cast_slice_mut(&mut corner_bytes[..48 * n as usize])
         .map_err(|_| HrError::SceneTooLarge)?;
@@ -88,7 +95,12 @@ pub(crate) fn load<S: SceneSource>(
                 let x = place.point(v[0].into());
                 out[3 * j..3 * j + 3].copy_from_slice(&x.to_array());
             }
-            counts[written as usize] = c as u8;
+            let two = view
+                .material_record(crate::MaterialId(pr[0].material))?
+                .flags
+                & crate::material::TWO_SIDED
+                != 0;
+            counts[written as usize] = c as u8 | if two { TWO_SIDED } else { 0 };
             written += 1;
         }
         Ok(())
@@ -145,7 +157,17 @@ pub(crate) fn load<S: SceneSource>(
         });
     }
     let polys = RegionPolygons { corners, counts };
-    let (nodes, rest) = tail.split_at_mut(p[3] - p[2]);
+    // Areas summed in order.
+    let areas: &mut [f32] = bytemuck::try_cast_slice_mut(&mut area_bytes[..4 * n as usize])
+        .map_err(|_| HrError::SceneTooLarge)?;
+    let mut sum = 0.0f32;
+    for (k, a) in areas.iter_mut().enumerate() {
+        let mut c = [Vec3::ZERO; 4];
+        let m = polys.corners(k as u32, &mut c);
+        sum += area_of(&c[..m]);
+        *a = sum;
+    }
+    let (nodes, rest) = tail.split_at_mut(p[4] - p[3]);
     let nodes: &mut [BvhNode] = bytemuck::try_cast_slice_mut(
         &mut nodes[..crate::bvh::nodes_needed(n) * core::mem::size_of::<BvhNode>()],
     )
@@ -176,7 +198,7 @@ impl PolygonSet for RegionPolygons<'_> {
         for (j, o) in out.iter_mut().enumerate() {
             *o = Vec3::new(f[3 * j], f[3 * j + 1], f[3 * j + 2]);
         }
-        c as usize
+        (c & !TWO_SIDED) as usize
     }
 }
 
@@ -184,26 +206,105 @@ impl PolygonSet for RegionPolygons<'_> {
 #[derive(Clone, Copy)]
 pub(crate) struct OriginalGeometry<'a> {
     vis: BvhVisibility<'a, RegionPolygons<'a>>,
+    areas: &'a [f32],
+}
+
+/// A point drawn on an original's polygons (see [`OriginalGeometry::sample`]), in its
+/// frame.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SurfacePoint {
+    pub point: Vec3,
+    /// Unit normal of the side drawn.
+    pub normal: Vec3,
+    pub polygon: u32,
+}
+
+/// Area of a planar convex polygon (m^2).
+fn area_of(c: &[Vec3]) -> f32 {
+    let mut a = Vec3::ZERO;
+    for k in 1..c.len().saturating_sub(1) {
+        a += (c[k] - c[0]).cross(c[k + 1] - c[0]);
+    }
+    0.5 * a.length()
 }
 
 impl<'a> OriginalGeometry<'a> {
     /// The geometry in `region` (see [`load`]); `None` if the region is not one.
     pub(crate) fn over(region: &'a [u8], n: u32) -> Option<Self> {
         let p = parts(n);
-        if region.len() < p[4] || n == 0 {
+        if region.len() < p[5] || n == 0 {
             return None;
         }
         let corners: &[f32] = bytemuck::try_cast_slice(&region[..48 * n as usize]).ok()?;
         let counts = &region[p[1]..p[1] + n as usize];
+        let areas: &[f32] = bytemuck::try_cast_slice(&region[p[2]..p[2] + 4 * n as usize]).ok()?;
         let nodes: &[BvhNode] = bytemuck::try_cast_slice(
-            &region[p[2]..p[2] + crate::bvh::nodes_needed(n) * core::mem::size_of::<BvhNode>()],
+            &region[p[3]..p[3] + crate::bvh::nodes_needed(n) * core::mem::size_of::<BvhNode>()],
         )
         .ok()?;
-        let order: &[u32] = bytemuck::try_cast_slice(&region[p[3]..p[3] + 4 * n as usize]).ok()?;
+        let order: &[u32] = bytemuck::try_cast_slice(&region[p[4]..p[4] + 4 * n as usize]).ok()?;
         let bvh = Bvh::new_unchecked(nodes, order);
         Some(OriginalGeometry {
             vis: BvhVisibility::new(bvh, RegionPolygons { corners, counts }),
+            areas,
         })
+    }
+
+    /// The polygons' total area (m^2, in the original's frame).
+    pub(crate) fn area(&self) -> f32 {
+        self.areas.last().copied().unwrap_or(0.0)
+    }
+
+    /// A point drawn uniformly by area from three numbers in [0, 1): `a` picks the
+    /// polygon and, for a two-sided one, the side (from where `a` falls within the
+    /// polygon's share); `(u, v)` the point on it (uniform on a parallelogram or a
+    /// triangle).
+    pub(crate) fn sample(&self, a: f32, u: f32, v: f32) -> Option<SurfacePoint> {
+        let total = self.area();
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let target = a * total;
+        let k = self
+            .areas
+            .partition_point(|&s| s <= target)
+            .min(self.areas.len() - 1);
+        let polys = self.vis.polygons();
+        let mut c = [Vec3::ZERO; 4];
+        let m = polys.corners(k as u32, &mut c);
+        if m < 3 {
+            return None;
+        }
+        let normal = (c[1] - c[0]).cross(c[m - 1] - c[0]).normalize_or_zero();
+        let lo = if k == 0 { 0.0 } else { self.areas[k - 1] };
+        let within = (target - lo) / (self.areas[k] - lo).max(f32::MIN_POSITIVE);
+        let two = polys.counts[k] & TWO_SIDED != 0;
+        let normal = if two && within >= 0.5 {
+            -normal
+        } else {
+            normal
+        };
+        let point = if m == 3 {
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
+            c[0] + (c[1] - c[0]) * u + (c[2] - c[0]) * v
+        } else {
+            crate::sampling::point_on(&c[..4], u, v)
+        };
+        Some(SurfacePoint {
+            point,
+            normal,
+            polygon: k as u32,
+        })
+    }
+
+    /// Where the segment `from..to`, in the original's frame, first meets one of its
+    /// polygons other than `skip` (its parameter).
+    pub(crate) fn first_hit_local(&self, from: Vec3, to: Vec3, skip: u32) -> Option<f32> {
+        self.vis.first_hit(from, to, [skip, NONE]).map(|(_, t)| t)
     }
 
     /// True when the segment `from..to` (world) meets a polygon of the instance placed by

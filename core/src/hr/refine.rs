@@ -658,6 +658,10 @@ fn split_self(st: &mut State, ws: &mut [u8], x: Elem) -> Option<usize> {
             if a == b && a.kind() != Kind::Cluster {
                 continue;
             }
+            // Light between closed instances goes through the exchange when it can.
+            if super::exchange::carries(st, ws, a, b) {
+                continue;
+            }
             let flags = if a == b { 0 } else { PENDING };
             add_link(st, ws, a, b, flags)?;
             added += 1;
@@ -681,11 +685,12 @@ fn split_link(
     }
     let n = children(st, ws, side, &mut kids)?;
     for &k in &kids[..n] {
-        if on_recv {
-            add_link(st, ws, k, emit, PENDING)?;
-        } else {
-            add_link(st, ws, recv, k, PENDING)?;
+        let (r, e) = if on_recv { (k, emit) } else { (recv, k) };
+        // Light between closed instances goes through the exchange when it can.
+        if super::exchange::carries(st, ws, r, e) {
+            continue;
         }
+        add_link(st, ws, r, e, PENDING)?;
     }
     Some(n)
 }

@@ -157,6 +157,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
         if st.instances > 0 {
             instance_light::light_instances(&mut st, ws, &vis, &mut seq, progress);
+            super::exchange::build(&mut st, ws, &vis, &mut seq, progress);
         }
         bins::areas(&st, ws);
         direct::test_closed(&mut st, ws, &vis);

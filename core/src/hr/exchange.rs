@@ -1,0 +1,358 @@
+//! Light between the closed instances of a level that block with their own polygons (see
+//! `original_geometry`): which share of each one's escaping light, per direction, reaches
+//! which other closed instance first. Neighbours in a canopy interpenetrate, and an
+//! isotropic kernel between their boxes' centres gave a plant twice the light of its
+//! neighbour beside it and too little of the light of a dense canopy around it; rays from
+//! the emitter's own surfaces find what its light really meets.
+//!
+//! Once per level, [`RAYS`] rays leave each such instance `J` from points drawn on its
+//! polygons by area, in cosine-distributed directions off the side drawn: the rays that meet
+//! `J` itself again are its own business (its tables hold that light); the others are its
+//! escaping light, evenly over its cross-section in every direction, as the tables assume.
+//! Per direction cell `c` of a 64-direction grid, the share `H(c, P) / E(c)` of the
+//! escaping rays that meet instance `P` first (before any polygon of the level) is kept.
+//! Each iteration `P` then receives from `J`, per cell, `J`'s escaping power that way (its
+//! tables' intensity times the cell's solid angle) times that share, as a beam from the
+//! opposite direction (see [`gather`]).
+//!
+//! Workspace region (see [`bytes_needed`]): per instance the first of its entries (and the
+//! total), then the entries (receiver << 6 | cell, share), then per instance, cell and band
+//! the power it received from the others at the last gather (W).
+
+use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::ids::{Elem, Kind};
+use super::layout::up;
+use super::state::State;
+use super::vis::{Ray, Vis, WsPolygons};
+use crate::limits::{MAX_BANDS, NONE};
+use crate::sampling::{hash3, unit2};
+use crate::tables::grid::DirectionGrid;
+use crate::visibility::Visibility;
+use glam::Vec3;
+
+/// Rays per instance.
+pub(crate) const RAYS: u32 = 1024;
+/// Side of the direction grid (64 cells).
+pub(crate) const SIDE: u32 = 8;
+/// Cells of the direction grid.
+pub(crate) const CELLS: usize = (SIDE * SIDE) as usize;
+/// Rays per chunk of work.
+const PER_CHUNK: u32 = 64;
+/// A ray's result: it met its own instance again.
+const INTERNAL: u32 = NONE;
+/// A ray's receiver when it met no closed instance first.
+const NOBODY: u32 = (1 << 26) - 1;
+
+/// One entry: the receiver and the cell of the light's direction of travel, and the share
+/// of the emitter's escaping light in that cell it takes.
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct Entry {
+    key: u32,
+    share: f32,
+}
+
+/// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
+/// entries, received power, end.
+fn parts(n: u32, bands: usize) -> [usize; 4] {
+    let n = n as usize;
+    let heads = 0;
+    let entries = heads + up(4 * (n + 1));
+    let power = entries + up(8 * n * RAYS as usize);
+    let end = power + up(4 * n * CELLS * bands);
+    [heads, entries, power, end]
+}
+
+/// Bytes of the region for `n` closed instances (0 without any).
+pub(crate) fn bytes_needed(n: u32, bands: usize) -> usize {
+    if n == 0 { 0 } else { parts(n, bands)[3] }
+}
+
+/// True when closed instance `i` sends its light to the others through the exchange (it
+/// blocks with its own polygons), not through links.
+pub(crate) fn sends(st: &State, ws: &[u8], i: u32) -> bool {
+    let leaf = st.instance(ws, i);
+    st.slot(ws, leaf.slot).blocking_polygons > 0
+}
+
+/// True when a link `recv <- emit` would carry light the exchange carries.
+pub(crate) fn carries(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
+    recv.kind() == Kind::Instance && emit.kind() == Kind::Instance && sends(st, ws, emit.index())
+}
+
+fn grid() -> DirectionGrid {
+    // Side 8 is a valid grid.
+    DirectionGrid::new(SIDE).unwrap_or(DirectionGrid::ONE)
+}
+
+/// Where the ray `j` of instance `i` goes: `INTERNAL`, or its receiver (`NOBODY`) << 6 |
+/// the cell of its direction.
+fn trace<V: Visibility + ?Sized>(st: &State, ws: &[u8], ray: &Ray<'_, V>, i: u32, j: u32) -> u32 {
+    let leaf = st.instance(ws, i);
+    let Some(g) = st.original_geometry(ws, leaf.slot) else {
+        return INTERNAL;
+    };
+    let place = crate::geometry::Similarity {
+        rotation: glam::Quat::from_array(leaf.rotation),
+        translation: leaf.translation.into(),
+        scale: leaf.scale,
+    };
+    let h = hash3(i, j, 0xE8C4);
+    let (a0, _) = unit2(hash3(h, 1, 0xA1));
+    let a = (j as f32 + a0) / RAYS as f32;
+    let (u, v) = unit2(hash3(h, 2, 0xA2));
+    let (du, dv) = unit2(hash3(h, 3, 0xA3));
+    let Some(sp) = g.sample(a.min(1.0 - f32::EPSILON), u, v) else {
+        return INTERNAL;
+    };
+    let d = super::direct::cosine_direction(sp.normal, du, dv);
+    if d == Vec3::ZERO {
+        return INTERNAL;
+    }
+    let x = place.point(sp.point);
+    let w = place.direction(d).normalize_or_zero();
+    let end = st.beyond(x, w);
+    // Its own polygons first (in its frame: the same parameter along the segment).
+    let local_end = crate::tables::closed::local_point(&place, end);
+    if g.first_hit_local(sp.point, local_end, sp.polygon).is_some() {
+        return INTERNAL;
+    }
+    let cell = grid().cell_of(w);
+    let wall = ray.first_hit(x, end, [NONE, NONE]).map_or(1.0, |(_, t)| t);
+    let to = x + (end - x) * wall;
+    let who = super::blockers::first_instance(st, ws, x, to, i, hash3(h, 4, 0xA4))
+        .map_or(NOBODY, |(p, _)| p);
+    (who << 6) | cell
+}
+
+struct Ctx<'a, 'v, V: ?Sized> {
+    st: &'a State,
+    ws: &'a mut [u8],
+    vis: &'a Vis<'v, V>,
+    /// The instance whose rays are being gathered: its escaping rays per cell and its hit
+    /// keys so far.
+    escaped: [u32; CELLS],
+    hits: heapless::Vec<u32, { RAYS as usize }>,
+    written: u32,
+}
+
+/// Traces every closed instance's rays and writes the shares (see the module
+/// documentation). Instances without polygons of their own send nothing here.
+pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
+    st: &mut State,
+    ws: &mut [u8],
+    vis: &Vis<'_, V>,
+    ex: &mut Fallback<'_, E>,
+    progress: &mut dyn Progress,
+) {
+    let n = st.instances;
+    if n == 0 {
+        return;
+    }
+    let parts_per = RAYS / PER_CHUNK;
+    let chunks = n as usize * parts_per as usize;
+    let mut rays = 0u64;
+    let mut ctx = Ctx {
+        st,
+        ws,
+        vis,
+        escaped: [0; CELLS],
+        hits: heapless::Vec::new(),
+        written: 0,
+    };
+    run_chunks(
+        ex,
+        &mut ctx,
+        chunks,
+        PER_CHUNK as usize,
+        |c: &Ctx<'_, '_, V>, chunk, buf| {
+            let i = (chunk / parts_per as usize) as u32;
+            let part = (chunk % parts_per as usize) as u32;
+            let ray = Ray {
+                vis: c.vis,
+                polys: WsPolygons { st: c.st, ws: c.ws },
+            };
+            let sends = sends(c.st, c.ws, i);
+            for (k, o) in buf.iter_mut().enumerate() {
+                let r = if sends {
+                    trace(c.st, c.ws, &ray, i, part * PER_CHUNK + k as u32)
+                } else {
+                    INTERNAL
+                };
+                *o = f32::from_bits(r);
+            }
+        },
+        |c: &mut Ctx<'_, '_, V>, chunk, buf| {
+            let i = (chunk / parts_per as usize) as u32;
+            let part = (chunk % parts_per as usize) as u32;
+            if part == 0 {
+                c.escaped = [0; CELLS];
+                c.hits.clear();
+            }
+            for &o in buf {
+                let r = o.to_bits();
+                if r == INTERNAL {
+                    continue;
+                }
+                rays += 1;
+                c.escaped[(r & 63) as usize] += 1;
+                if r >> 6 != NOBODY {
+                    let _ = c.hits.push(r);
+                }
+            }
+            if part + 1 == parts_per {
+                flush(c, i);
+            }
+        },
+        &mut |done, total| {
+            progress.report("light between closed instances", done as u64, total as u64)
+        },
+    );
+    let written = ctx.written;
+    let p = parts(n, st.bands);
+    let at = st.lay.exchange + p[0] + 4 * n as usize;
+    super::pool::write(ws, at, &written);
+    st.stats.rays += rays;
+    st.stats.rays_by_phase.links += rays;
+}
+
+/// Writes instance `i`'s entries from its rays' keys.
+fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
+    let p = parts(c.st.instances, c.st.bands);
+    let base = c.st.lay.exchange;
+    super::pool::write(c.ws, base + p[0] + 4 * i as usize, &c.written);
+    c.hits.sort_unstable();
+    let mut k = 0;
+    while k < c.hits.len() {
+        let key = c.hits[k];
+        let mut m = k;
+        while m < c.hits.len() && c.hits[m] == key {
+            m += 1;
+        }
+        let e = c.escaped[(key & 63) as usize].max(1);
+        let entry = Entry {
+            key,
+            share: (m - k) as f32 / e as f32,
+        };
+        let at = base + p[1] + 8 * c.written as usize;
+        super::pool::write(c.ws, at, &entry);
+        c.written += 1;
+        k = m;
+    }
+}
+
+/// The power (W per band) closed instance `i` received from the others at the last
+/// [`gather`], per cell of the direction it came from.
+fn power_at(st: &State, i: u32, cell: usize) -> usize {
+    let p = parts(st.instances, st.bands);
+    st.lay.exchange + p[2] + 4 * ((i as usize * CELLS + cell) * st.bands)
+}
+
+/// Hands every closed instance's escaping light to the instances it reaches (see the
+/// module documentation), from the light they hold now: fills the received power of every
+/// instance, which [`receive`] then adds to its light.
+pub(crate) fn gather(st: &State, ws: &mut [u8]) {
+    let n = st.instances;
+    if n == 0 {
+        return;
+    }
+    let nb = st.bands;
+    let p = parts(n, nb);
+    let base = st.lay.exchange;
+    // The tables and received light lie before the region, the shares and powers in it.
+    let (ws, region) = ws.split_at_mut(base);
+    let ws: &[u8] = ws;
+    region[p[2]..p[3]].fill(0);
+    let grid = grid();
+    let solid = 4.0 * core::f32::consts::PI / CELLS as f32;
+    let mut opposite = [0u32; CELLS];
+    for (c, o) in opposite.iter_mut().enumerate() {
+        *o = grid.cell_of(-grid.direction(c as u32));
+    }
+    for j in 0..n {
+        let first: u32 = super::pool::read(region, p[0] + 4 * j as usize);
+        let last: u32 = super::pool::read(region, p[0] + 4 * (j as usize + 1));
+        if first >= last {
+            continue;
+        }
+        // The escaping power per cell, computed the first time a cell is needed.
+        let mut sent = [[0.0f32; MAX_BANDS]; CELLS];
+        let mut known = 0u64;
+        let placed = st.placed(ws, j);
+        let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, j)) else {
+            continue;
+        };
+        for e in first..last {
+            let entry: Entry = super::pool::read(region, p[1] + 8 * e as usize);
+            let cell = (entry.key & 63) as usize;
+            let to = entry.key >> 6;
+            if to >= n {
+                continue;
+            }
+            if known & (1 << cell) == 0 {
+                known |= 1 << cell;
+                let d = grid.direction(cell as u32);
+                for (band, s) in sent[cell].iter_mut().enumerate().take(nb) {
+                    *s = r.intensity(&placed, d, band).max(0.0) * solid;
+                }
+            }
+            let at = power_at(st, to, opposite[cell] as usize) - base;
+            let acc: &mut [f32] = super::pool::floats_mut(region, at, nb);
+            for (band, v) in acc.iter_mut().enumerate() {
+                *v += sent[cell][band] * entry.share;
+            }
+        }
+    }
+}
+
+/// Adds to part `part` of closed instance `i`'s received light what the last [`gather`]
+/// handed it, beam by beam (each cell's power over its cross-section that way).
+pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
+    let nb = st.bands;
+    let grid = grid();
+    for cell in 0..CELLS {
+        let mut e = [0.0f32; MAX_BANDS];
+        let power = super::pool::floats(ws, power_at(st, i, cell), nb);
+        if power.iter().all(|&v| v <= 0.0) {
+            continue;
+        }
+        e[..nb].copy_from_slice(power);
+        let d = grid.direction(cell as u32);
+        st.with_received(ws, i, part, |placed, r| {
+            let s = placed.shadow(d);
+            if s > 0.0 {
+                for v in &mut e[..nb] {
+                    *v /= s;
+                }
+                r.receive(placed, d, &e[..nb]);
+            }
+        });
+    }
+}
+
+/// The beams (direction towards the emitters, flux density per band, W/m^2) closed
+/// instance `i` received from the others at the last [`gather`], through `f`.
+pub(crate) fn beams(st: &State, ws: &[u8], i: u32, mut f: impl FnMut(Vec3, &[f32])) {
+    if st.instances == 0 {
+        return;
+    }
+    let nb = st.bands;
+    let grid = grid();
+    let placed = st.placed(ws, i);
+    for cell in 0..CELLS {
+        let power = super::pool::floats(ws, power_at(st, i, cell), nb);
+        if power.iter().all(|&v| v <= 0.0) {
+            continue;
+        }
+        let d = grid.direction(cell as u32);
+        let s = placed.shadow(d);
+        if s <= 0.0 {
+            continue;
+        }
+        let mut e = [0.0f32; MAX_BANDS];
+        for (o, v) in e.iter_mut().zip(power) {
+            *o = v / s;
+        }
+        f(d, &e[..nb]);
+    }
+}
