@@ -128,9 +128,18 @@ pub(crate) const MAX_ALONG: usize = 32;
 
 /// The light the closed instances along the segment `from..to` send back towards `from`,
 /// as radiosity (W/m^2 per band, `pi` times radiance: what a gather ray adds), nearer ones
-/// first, each behind what the nearer let through; `out` gets it added. Returns what they
-/// let through all together (the weight of whatever lies behind them).
-pub(crate) fn light_along(st: &State, ws: &[u8], from: Vec3, to: Vec3, out: &mut [f32]) -> f32 {
+/// first, each behind what the nearer let through; `out` gets it added times `weight`.
+/// Instance `skip` (an opened one, or `NONE`) is not there. Returns what they let through
+/// all together (the weight of whatever lies behind them, before `weight`).
+pub(crate) fn light_along(
+    st: &State,
+    ws: &[u8],
+    from: Vec3,
+    to: Vec3,
+    skip: u32,
+    weight: f32,
+    out: &mut [f32],
+) -> f32 {
     if st.instances == 0 {
         return 1.0;
     }
@@ -138,6 +147,9 @@ pub(crate) fn light_along(st: &State, ws: &[u8], from: Vec3, to: Vec3, out: &mut
     // (entry, transmittance, instance), sorted by entry.
     let mut met: heapless::Vec<(f32, f32, u32), MAX_ALONG> = heapless::Vec::new();
     bvh(st, ws).any_hit(from, to, |i| {
+        if i == skip {
+            return false;
+        }
         let (lo, hi, place, slot) = placed_box(st, ws, i);
         if !crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
             return false;
@@ -167,7 +179,7 @@ pub(crate) fn light_along(st: &State, ws: &[u8], from: Vec3, to: Vec3, out: &mut
             && t < 1.0
             && let Ok(r) = received
         {
-            let w = through * (1.0 - t) * core::f32::consts::PI / shadow;
+            let w = weight * through * (1.0 - t) * core::f32::consts::PI / shadow;
             for (band, o) in out.iter_mut().enumerate() {
                 *o += w * r.intensity(&placed, -d, band);
             }

@@ -115,6 +115,10 @@ pub(crate) fn prepare_pending<V: Visibility + ?Sized, E: Executor>(
                         if let Some(d) = c.st.direct_mut(c.ws, e, side) {
                             d.copy_from_slice(&o[3 + side * nb..3 + (side + 1) * nb]);
                         }
+                        if let Some(d) = c.st.linked_mut(c.ws, e, side) {
+                            let at = 4 + 2 * nb + side * nb;
+                            d.copy_from_slice(&o[at..at + nb]);
+                        }
                     }
                 }
             },
@@ -204,6 +208,8 @@ fn prepare<V: Visibility + ?Sized>(
     if sources > 0 && st.lay.strides.direct {
         let sides = State::sides(e);
         let mut direct = [[0.0f32; 8]; 2];
+        // The part of it that came through links (see `Strides::links_apart`).
+        let mut linked = [[0.0f32; 8]; 2];
         let cells = cells_for(st, p.area);
         let mut shadow = 0.0f32;
         // Suns: adaptive visibility per sun.
@@ -223,6 +229,9 @@ fn prepare<V: Visibility + ?Sized>(
             for (b, d) in direct[side][..nb].iter_mut().enumerate() {
                 let v = irr.get(b).copied().unwrap_or(0.0) * c.abs();
                 *d += v * lit;
+                if src.outer != NONE {
+                    linked[side][b] += v * lit;
+                }
                 e_max = e_max.max(v);
             }
             shadow += e_max * p.area * 2.0 * lit.min(1.0 - lit);
@@ -244,14 +253,18 @@ fn prepare<V: Visibility + ?Sized>(
             sides,
             sky,
             vis,
-            &mut direct,
+            [&mut direct, &mut linked],
             &mut rays,
         );
         // The patch's irradiance is the mean over its exposed part; buried parts are dark.
         let scale = if out[1] > 0.0 { 1.0 / out[1] } else { 0.0 };
+        let apart = st.lay.strides.links_apart;
         for side in 0..sides {
             for b in 0..nb {
                 out[3 + side * nb + b] = direct[side][b] * scale.min(1e6);
+                if apart {
+                    out[4 + 2 * nb + side * nb + b] = linked[side][b] * scale.min(1e6);
+                }
             }
         }
         out[2] = shadow;
@@ -588,7 +601,7 @@ fn sky_light<V: Visibility + ?Sized>(
     sides: usize,
     count: u32,
     vis: &V,
-    direct: &mut [[f32; 8]; 2],
+    [direct, linked]: [&mut [[f32; 8]; 2]; 2],
     rays: &mut u32,
 ) {
     let nb = st.bands;
@@ -663,6 +676,9 @@ fn sky_light<V: Visibility + ?Sized>(
         for (b, d) in direct[side][..nb].iter_mut().enumerate() {
             let e_b = irr.get(b).copied().unwrap_or(0.0) * c.abs();
             *d += inv * jw * t * e_b / w;
+            if src.outer != NONE {
+                linked[side][b] += inv * jw * t * e_b / w;
+            }
         }
     }
 }

@@ -20,6 +20,7 @@ use super::direct::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
 use super::gather_rays::{adaptive_rays, gathered_share, polygon_rays};
 use super::ids::Elem;
 use super::state::State;
+use super::vis::Ray;
 use crate::formfactor::{facing_side, point_polygon};
 use crate::limits::NONE;
 use crate::sampling::{
@@ -78,8 +79,11 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
 }
 
 /// Gathers polygon `poly`'s irradiance (W/m^2, per side and band, the mean over its whole
-/// area) into `out[side * bands + band]`, without the direct light of suns and sky. Returns
-/// the rays cast.
+/// area) into `out[side * bands + band]`, without the direct light of suns and sky. In an
+/// opened instance's level, the rays that leave it read the levels around (see
+/// `Ray::gather_beyond`), so the light its patches' direct light took from links (see
+/// `Strides::links_apart`) is taken off: the direct light plus this is then what the
+/// polygon sees. Returns the rays cast.
 ///
 /// The samples are spread over the polygon's leaf patches by area, at least one per leaf:
 /// the hierarchy subdivided where the light varies (beside a lamp, at a shadow edge), so a
@@ -87,7 +91,7 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
 pub(crate) fn polygon<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
-    vis: &V,
+    vis: &Ray<'_, V>,
     poly: u32,
     rays: u32,
     em: &Emitters,
@@ -135,6 +139,12 @@ pub(crate) fn polygon<V: Visibility + ?Sized>(
                 em,
                 &mut c[..nb],
             );
+            // Light through links was gathered through the levels around (see `linked`).
+            if let Some(l) = st.linked(ws, e, side) {
+                for (cb, lb) in c[..nb].iter_mut().zip(l) {
+                    *cb -= *lb as f64;
+                }
+            }
             for (sb, cb) in sum[..nb].iter_mut().zip(&c[..nb]) {
                 *sb += a * cb;
             }
@@ -168,7 +178,7 @@ pub(crate) fn leaf_grid(rays: u32, leaf: f32, polygon: f32) -> u32 {
 pub(crate) fn leaf<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
-    vis: &V,
+    vis: &Ray<'_, V>,
     poly: u32,
     corners: &[Vec3],
     nrm: Vec3,
@@ -214,10 +224,14 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
         // Closed instances on the way: their light, and what they let through to the rest.
         let through = if st.instances > 0 {
             let to = first.map_or(end, |(_, t)| x + (end - x) * t);
-            super::blockers::light_along(st, ws, x, to, &mut c[..nb])
+            super::blockers::light_along(st, ws, x, to, NONE, 1.0, &mut c[..nb])
         } else {
             1.0
         };
+        if first.is_none() && through > 0.0 {
+            // Out of this level: on through the levels it is open in.
+            vis.gather_beyond(x, d, through, &mut c[..nb]);
+        }
         if let Some((hit, t)) = first
             && hit < st.polygons
         {

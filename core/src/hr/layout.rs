@@ -7,7 +7,6 @@
 
 use super::census::Census;
 use super::records::*;
-use super::settings::Settings;
 
 /// Growing pools sharing the blocks: one-sided patches, two-sided patches, links, emission
 /// bins of large clusters.
@@ -38,6 +37,11 @@ pub(crate) struct Strides {
     pub bands: usize,
     /// True when the scene has suns or sky directions: patches keep their direct light.
     pub direct: bool,
+    /// True when patches also keep apart the part of their direct light that came through
+    /// links (an opened instance's level: sources lit by links of the levels around it,
+    /// whose light its final gather reads through those levels instead, see
+    /// `final_gather`).
+    pub links_apart: bool,
     pub polygon: usize,
     pub cluster: usize,
     pub patch1: usize,
@@ -52,13 +56,29 @@ pub(crate) struct Strides {
 }
 
 impl Strides {
-    pub(crate) fn new(bands: usize, any_two_sided: bool, sources: bool) -> Strides {
+    pub(crate) fn new(
+        bands: usize,
+        any_two_sided: bool,
+        sources: bool,
+        links_apart: bool,
+    ) -> Strides {
         let link_k = if any_two_sided { 4 } else { 1 };
-        // Per side: radiosity, gathered irradiance and, with sources, direct irradiance.
-        let per_side = 4 * bands * if sources { 3 } else { 2 };
+        let links_apart = sources && links_apart;
+        // Per side: radiosity, gathered irradiance and, with sources, direct irradiance (and
+        // its part through links).
+        let per_side = 4
+            * bands
+            * if links_apart {
+                4
+            } else if sources {
+                3
+            } else {
+                2
+            };
         Strides {
             bands,
             direct: sources,
+            links_apart,
             polygon: core::mem::size_of::<Polygon>() + 16 * bands,
             cluster: core::mem::size_of::<Cluster>()
                 + 4 * bands
@@ -86,9 +106,10 @@ impl Strides {
     }
 
     /// Floats a prepared patch hands back: its buried points, exposure, shadow measure,
-    /// direct irradiance per side and band, and the rays cast.
+    /// direct irradiance per side and band, the rays cast, and the direct irradiance's part
+    /// through links per side and band.
     pub(crate) fn prepare_out(&self) -> usize {
-        4 + 2 * self.bands
+        4 + if self.links_apart { 4 } else { 2 } * self.bands
     }
 }
 
@@ -191,12 +212,12 @@ impl Layout {
         originals: u32,
         sources: u32,
         bands: usize,
-        settings: &Settings,
+        links_apart: bool,
         internal_bvh: bool,
         total: usize,
     ) -> Option<Layout> {
         let any_two = census.polys_two_sided > 0;
-        let strides = Strides::new(bands, any_two, sources > 0);
+        let strides = Strides::new(bands, any_two, sources > 0, links_apart);
         let n_clusters = u32::try_from(census.clusters)
             .ok()
             .filter(|&c| c <= super::ids::Elem::MAX_INDEX)?;
@@ -248,7 +269,6 @@ impl Layout {
                 .max(strides.gather_out())
                 .max(strides.prepare_out())
                 .max(strides.bands);
-        let _ = settings;
         let before_tables = at;
         let bvh_bytes = if internal_bvh {
             up(crate::bvh::bytes_needed(n_polygons))

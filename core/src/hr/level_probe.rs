@@ -146,7 +146,7 @@ pub fn load_level<S: SceneSource>(
         info.originals,
         sources(view),
         info.bands as usize,
-        settings,
+        false,
         true,
         ws.len(),
     )

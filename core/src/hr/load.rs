@@ -449,6 +449,9 @@ fn add_root_patch(
         if let Some(d) = s.direct_mut(ws, e, side) {
             d.fill(0.0);
         }
+        if let Some(d) = s.linked_mut(ws, e, side) {
+            d.fill(0.0);
+        }
     }
     let rec = Polygon {
         normal: shape.normal.to_array(),

@@ -212,7 +212,9 @@ fn polygon<K: Sink>(
         // The polygon's own light: gathered, plus the direct light of its patches.
         for side in 0..sides {
             for k in 0..nb {
-                h[side][k] = g[side * nb + k] + (d_sum[side][k] * inv) as f32;
+                // Never below zero (in an opened level, the light through links comes off
+                // the gathered light, and both are estimates).
+                h[side][k] = (g[side * nb + k] + (d_sum[side][k] * inv) as f32).max(0.0);
             }
         }
         for side in 0..sides {

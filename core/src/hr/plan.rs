@@ -41,20 +41,22 @@ pub fn plan<S: SceneSource>(
 ) -> Result<Plan, HrError> {
     settings.check()?;
     let c = census(view, settings.max_children, scratch)?;
-    plan_level(view, settings, internal_bvh, &c, sources(view))
+    plan_level(view, settings, internal_bvh, &c, sources(view), false)
 }
 
 pub(super) fn sources<S: SceneSource>(view: &SceneView<S>) -> u32 {
     view.info().suns + view.info().sky
 }
 
-/// The plan of a level of census `c` lit by `n_sources` directional sources.
+/// The plan of a level of census `c` lit by `n_sources` directional sources (`nested`: an
+/// opened instance's level, see `Strides::links_apart`).
 pub(super) fn plan_level<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     internal: bool,
     c: &Census,
     n_sources: u32,
+    nested: bool,
 ) -> Result<Plan, HrError> {
     let info = view.info();
     let bands = info.bands as usize;
@@ -66,7 +68,7 @@ pub(super) fn plan_level<S: SceneSource>(
             info.originals,
             n_sources,
             bands,
-            settings,
+            nested,
             internal,
             total,
         )

@@ -302,6 +302,9 @@ fn subdivide_patch(st: &mut State, ws: &mut [u8], e: Elem, p: &Patch, pool: usiz
             if let Some(d) = st.direct_mut(ws, child, side) {
                 d.fill(0.0);
             }
+            if let Some(d) = st.linked_mut(ws, child, side) {
+                d.fill(0.0);
+            }
         }
     }
     let mut q = *p;

@@ -230,6 +230,12 @@ fn relight<V: Visibility + ?Sized, E: Executor>(
                             &c.em,
                             &mut h[..nb],
                         );
+                        // As `final_gather::polygon`: the light through links was gathered.
+                        if let Some(l) = c.st.linked(c.ws, e, side) {
+                            for (hb, lb) in h[..nb].iter_mut().zip(l) {
+                                *hb -= *lb as f64;
+                            }
+                        }
                         for (d, v) in o[1 + side * nb..1 + (side + 1) * nb].iter_mut().zip(&h) {
                             *d = *v as f32;
                         }

@@ -117,7 +117,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         }
         let internal = visibility.is_none();
         let n_sources = level.sources(view);
-        let plan = plan_level(view, settings, internal, &c, n_sources)?;
+        let plan = plan_level(view, settings, internal, &c, n_sources, outer.is_some())?;
         let info = view.info();
         let lay = Layout::new(
             &c,
@@ -125,7 +125,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             info.originals,
             n_sources,
             info.bands as usize,
-            settings,
+            outer.is_some(),
             internal,
             ws.len(),
         )

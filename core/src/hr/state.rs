@@ -291,6 +291,36 @@ impl State {
         Some(floats_mut(ws, at, nb))
     }
 
+    /// The part of [`State::direct`] that came through links of the levels around (see
+    /// `Strides::links_apart`), or `None` when it is not kept apart.
+    pub(crate) fn linked<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
+        if !self.lay.strides.links_apart {
+            return None;
+        }
+        let nb = self.bands;
+        let sides = Self::sides(e);
+        Some(floats(
+            ws,
+            self.values_at(ws, e) + 4 * nb * (3 * sides + side.min(sides - 1)),
+            nb,
+        ))
+    }
+
+    pub(crate) fn linked_mut<'a>(
+        &self,
+        ws: &'a mut [u8],
+        e: Elem,
+        side: usize,
+    ) -> Option<&'a mut [f32]> {
+        if !self.lay.strides.links_apart {
+            return None;
+        }
+        let nb = self.bands;
+        let sides = Self::sides(e);
+        let at = self.values_at(ws, e) + 4 * nb * (3 * sides + side.min(sides - 1));
+        Some(floats_mut(ws, at, nb))
+    }
+
     /// Byte offset of polygon `i`'s record.
     fn polygon_at(&self, i: u32) -> usize {
         self.lay.polygons + i as usize * self.lay.strides.polygon

@@ -122,6 +122,54 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
     }
 }
 
+impl<V: Visibility + ?Sized> Ray<'_, V> {
+    /// A gather ray from `x` along the unit direction `d` that left this level without
+    /// meeting anything: what it reads in the levels this one is open in (figure 2's
+    /// render through the stack), times `weight`, added to `out` (radiosity per band,
+    /// W/m^2): the patch of an outer level's polygon it meets (its side's radiosity, its
+    /// emission included), and the light of the outer levels' closed instances on the way
+    /// (the opened one aside), nearest first; on through the next outer level if it meets
+    /// no polygon. Nothing in a level not opened from another.
+    pub(crate) fn gather_beyond(&self, x: Vec3, d: Vec3, weight: f32, out: &mut [f32]) {
+        let Vis::Nested(_, outer) = self.vis else {
+            return;
+        };
+        let (st, ws) = (outer.st, outer.ws);
+        let ray = outer.ray();
+        let end = st.beyond(x, d);
+        let first = ray.first_hit(x, end, [crate::limits::NONE; 2]);
+        let through = if st.instances > 0 {
+            let to = first.map_or(end, |(_, t)| x + (end - x) * t);
+            super::blockers::light_along(st, ws, x, to, outer.opened, weight, out)
+        } else {
+            1.0
+        };
+        let w = weight * through;
+        if w <= 0.0 {
+            return;
+        }
+        match first {
+            Some((hit, t)) if hit < st.polygons => {
+                let y = x + (end - x) * t;
+                let hp = st.polygon(ws, hit);
+                let n = Vec3::from(hp.normal);
+                let side = if n.dot(d) < 0.0 { 0 } else { 1 };
+                let root = Elem(hp.root);
+                if side < State::sides(root) {
+                    let at = super::final_gather::leaf_at(st, ws, root, y, n);
+                    if let Some(b) = st.b(ws, at, side) {
+                        for (o, v) in out.iter_mut().zip(b) {
+                            *o += w * v.max(0.0);
+                        }
+                    }
+                }
+            }
+            Some(_) => {}
+            None => ray.gather_beyond(x, d, w, out),
+        }
+    }
+}
+
 impl<V: Visibility + ?Sized> Visibility for Ray<'_, V> {
     fn transmittance(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> f32 {
         let t = match self.vis {
