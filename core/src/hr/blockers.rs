@@ -171,17 +171,21 @@ pub(crate) fn light_along(
     });
     met.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
     let mut through = 1.0f32;
+    if met.is_empty() {
+        return through;
+    }
+    let cells = RADIANCE_GRID.weights(-d);
     for &(_, t, i) in &met {
-        let placed = st.placed(ws, i);
-        let shadow = placed.shadow(-d);
-        let received = crate::tables::closed::Received::over(&placed, st.received(ws, i));
-        if shadow > 0.0
-            && t < 1.0
-            && let Ok(r) = received
-        {
-            let w = weight * through * (1.0 - t) * core::f32::consts::PI / shadow;
+        if t < 1.0 {
+            let w = weight * through * (1.0 - t);
             for (band, o) in out.iter_mut().enumerate() {
-                *o += w * r.intensity(&placed, -d, band);
+                let mut v = 0.0f32;
+                for &(c, cw) in &cells {
+                    if cw > 0.0 {
+                        v += cw * radiance(st, ws, i, c, band);
+                    }
+                }
+                *o += w * v;
             }
         }
         through *= t;
@@ -190,6 +194,53 @@ pub(crate) fn light_along(
         }
     }
     through
+}
+
+/// The grid of directions closed instances' radiance is noted on (256 cells).
+const RADIANCE_GRID: crate::tables::grid::DirectionGrid =
+    crate::tables::grid::DirectionGrid::SIDE_16;
+
+/// Bytes of the noted radiance of `n` closed instances (see [`note_radiance`]).
+pub(crate) fn radiance_bytes(n: u32, bands: usize) -> usize {
+    n as usize * RADIANCE_GRID.cells() as usize * bands * 4
+}
+
+fn radiance_at(st: &State, i: u32, cell: u32, band: usize) -> usize {
+    let cells = RADIANCE_GRID.cells() as usize;
+    st.lay.radiance + 4 * ((i as usize * cells + cell as usize) * st.bands + band)
+}
+
+fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize) -> f32 {
+    super::pool::read(ws, radiance_at(st, i, cell, band))
+}
+
+/// Notes, for every closed instance, the radiosity (`pi` times the radiance, W/m^2 per
+/// band) its contents show an observer in each cell's direction: its tables' intensity
+/// that way over its cross-section, from the light it holds now. Gather rays read it (see
+/// [`light_along`]) once the level is solved: the tables' sum over all their cells for
+/// every ray was four fifths of a canopy's gather.
+pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
+    for i in 0..st.instances {
+        for cell in 0..RADIANCE_GRID.cells() {
+            let o = RADIANCE_GRID.direction(cell);
+            let mut v = [0.0f32; crate::limits::MAX_BANDS];
+            {
+                let placed = st.placed(ws, i);
+                let shadow = placed.shadow(o);
+                if let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i))
+                    && shadow > 0.0
+                {
+                    for (band, x) in v.iter_mut().enumerate().take(st.bands) {
+                        *x =
+                            core::f32::consts::PI * r.intensity(&placed, o, band).max(0.0) / shadow;
+                    }
+                }
+            }
+            for (band, x) in v.iter().enumerate().take(st.bands) {
+                super::pool::write(ws, radiance_at(st, i, cell, band), x);
+            }
+        }
+    }
 }
 
 /// Closed instance `i`'s original's box, its transform to world and its table slot.

@@ -26,9 +26,11 @@ pub(crate) fn rays_per_side(st: &State, ws: &[u8]) -> u32 {
         return 0;
     }
     let n = if asked == super::settings::Settings::AUTO {
-        let mut sides = 0u64;
-        for i in 0..st.polygons {
-            sides += State::sides(Elem(st.polygon(ws, i).root)) as u64;
+        let mut sides = st.scene_sides;
+        if sides == 0 {
+            for i in 0..st.polygons {
+                sides += State::sides(Elem(st.polygon(ws, i).root)) as u64;
+            }
         }
         let eps = st.settings.epsilon as f64;
         let budget = AUTO_BUDGET * (1e-3 / eps);

@@ -163,6 +163,9 @@ pub(crate) struct Layout {
     pub source_tau: usize,
     /// The light between closed instances (see `exchange`).
     pub exchange: usize,
+    /// Per closed instance, direction cell and band, the radiosity its contents show an
+    /// observer that way (see `blockers::note_radiance`).
+    pub radiance: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
@@ -260,6 +263,7 @@ impl Layout {
                 .checked_mul(4)?,
         )?;
         let exchange_at = region(super::exchange::bytes_needed(n_instances, bands))?;
+        let radiance_at = region(super::blockers::radiance_bytes(n_instances, bands))?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -330,6 +334,7 @@ impl Layout {
             closed_bvh: closed_bvh_at,
             source_tau: source_tau_at,
             exchange: exchange_at,
+            radiance: radiance_at,
             n_clusters,
             n_polygons,
             n_instances,

@@ -74,6 +74,7 @@ pub(crate) fn load<S: SceneSource>(
         child_entries: 0,
         power: 0.0,
         unit_power: 0.0,
+        scene_sides: 0,
         suns: level.suns(view),
         sources: level.sources(view),
         typical_area: 0.0,

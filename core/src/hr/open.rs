@@ -71,6 +71,16 @@ where
     };
     expanded_originals(view, memo)?;
     let memo: &[Census] = memo;
+    // The whole scene's receiving sides (the final gather's rays are spread over them).
+    let need = super::census::census_scratch_bytes(view);
+    if rest.len() < need {
+        return Err(HrError::WorkspaceTooSmall {
+            needed: (memo_bytes + need) as u64,
+        }
+        .into());
+    }
+    let whole = super::census::census(view, settings.max_children, &mut rest[..need])?;
+    let scene_sides = whole.polys_one_sided + 2 * whole.polys_two_sided;
     let mut total = Stats::default();
     let origin = memo_bytes.next_multiple_of(super::layout::ALIGN);
     let root = LevelRoot::scene(view);
@@ -83,6 +93,7 @@ where
         stats: &mut total,
         levels: 0,
         unit_power: 0.0,
+        scene_sides,
     };
     level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
     let levels = ctx.levels;
@@ -103,6 +114,8 @@ struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
     levels: u64,
     /// The top level's power (W, epsilon's unit for every level).
     unit_power: f32,
+    /// The whole scene's receiving sides (see `State::scene_sides`).
+    scene_sides: u64,
 }
 
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
@@ -142,6 +155,7 @@ where
     )?;
     // Refined by the scene's threshold: the top level's power, not the contents' own.
     run.st.unit_power = ctx.unit_power;
+    run.st.scene_sides = ctx.scene_sides;
     run.rounds(ctx.progress);
     let Run {
         mut st,
@@ -174,6 +188,8 @@ where
         let balance = super::balance::measure(&st, ws, &vis, &mut seq, rays, ctx.progress);
         st.stats.balance = balance;
     }
+    // What its closed instances show gather rays, here and from the levels opened in it.
+    super::blockers::note_radiance(&st, ws);
     add_level(ctx.stats, &st.stats, origin, depth == 0);
     ctx.stats.level_depth = ctx.stats.level_depth.max(depth as u32);
     ctx.stats.closed_instances += st.instances as u64;

@@ -245,6 +245,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         }
         let rays = 4 * st.settings.rays;
         st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);
+        super::blockers::note_radiance(st, ws);
         progress.report(output::phase(st, ws), 0, st.polygons as u64);
         let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
             .map_err(SolveError::Sink)?;

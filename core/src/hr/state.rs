@@ -36,6 +36,10 @@ pub(crate) struct State {
     /// instance's level refines by its scene's threshold, as the expanded scene would; 0
     /// otherwise.
     pub unit_power: f32,
+    /// Receiving sides of the whole scene's polygons, every instance expanded, when this
+    /// is one of its levels (the final gather spreads its rays over them, see
+    /// `gather_rays::rays_per_side`); 0: this level's own.
+    pub scene_sides: u64,
     /// Suns (the first sources) and all sources (suns, then sky directions).
     pub suns: u32,
     pub sources: u32,

@@ -36,6 +36,8 @@ type Triangle = ([u32; 3], [f32; 3], f32, [Vec3; 3]);
 impl DirectionGrid {
     /// The grid of one cell: the whole sphere.
     pub const ONE: DirectionGrid = DirectionGrid { side: 1 };
+    /// The grid of 16 x 16 cells.
+    pub const SIDE_16: DirectionGrid = DirectionGrid { side: 16 };
 
     /// A grid of `side x side` cells, `side` in `1..=MAX_SIDE`.
     pub fn new(side: u32) -> Result<Self, GridError> {
