@@ -311,69 +311,68 @@ fn closed_instances_block_by_tau_along_what_they_cross() {
         .map(|t| DirectionalTables::from_record(&t.record, &t.values, &t.visible).unwrap())
         .collect();
     let mut ws = vec![0u8; 64 << 20];
-    load_level(
-        &view,
-        &Settings::default(),
-        Instancing::Top,
-        &mut ws,
-        |level| {
-            // Instances by node: the scene's order, as `places`.
-            let mut by_node: Vec<u32> = (0..level.instances()).collect();
-            by_node.sort_by_key(|&i| level.instance(i).node);
-            let original = |k: usize| if (12..14).contains(&k) { 1 } else { 0 };
-            // The reference: points along the segment tell which boxes it enters.
-            let reference = |a: Vec3, b: Vec3, skip: Option<usize>| -> (f32, usize) {
-                let d = (b - a).normalize();
-                let (mut t, mut crossed) = (1.0f32, 0);
-                for (k, p) in places.iter().enumerate() {
-                    if Some(k) == skip {
-                        continue;
-                    }
-                    let tables = &image_tables[original(k)];
-                    let (lo, hi) = tables.bounds();
-                    if let Some(share) = chord_share(p, lo, hi, a, b) {
-                        let tau = tables.tau(p.rotation.conjugate() * d);
-                        t *= if share >= 1.0 { tau } else { tau.powf(share) };
-                        crossed += 1;
-                    }
-                }
-                (t, crossed)
-            };
-            let mut crossings = 0;
-            for k in 0..200u32 {
-                let h = |j: u32| ((k * 7919 + j * 104_729) % 1000) as f32 / 1000.0;
-                let a = Vec3::new(-6.0 + 12.0 * h(1), -6.0 + 12.0 * h(2), 0.1 + 1.5 * h(3));
-                let b = Vec3::new(-6.0 + 12.0 * h(4), -6.0 + 12.0 * h(5), 0.1 + 1.5 * h(6));
-                let (want, crossed) = reference(a, b, None);
-                crossings += crossed;
-                let got = level.transmittance(a, b, None);
-                // Partial crossings' shares are sampled in the reference.
-                assert!(
-                    (got - want).abs() < 1e-5 + 0.01 * want,
-                    "segment {k}: {got} vs {want} ({crossed} boxes)"
-                );
-            }
-            assert!(crossings > 20, "the segments must cross boxes: {crossings}");
-            // From inside an instance with it skipped: the others only.
+    // Every closed instance as a medium (its tau), not with its own polygons.
+    let settings = Settings {
+        blocking_polygons: 0,
+        ..Settings::default()
+    };
+    load_level(&view, &settings, Instancing::Top, &mut ws, |level| {
+        // Instances by node: the scene's order, as `places`.
+        let mut by_node: Vec<u32> = (0..level.instances()).collect();
+        by_node.sort_by_key(|&i| level.instance(i).node);
+        let original = |k: usize| if (12..14).contains(&k) { 1 } else { 0 };
+        // The reference: points along the segment tell which boxes it enters.
+        let reference = |a: Vec3, b: Vec3, skip: Option<usize>| -> (f32, usize) {
+            let d = (b - a).normalize();
+            let (mut t, mut crossed) = (1.0f32, 0);
             for (k, p) in places.iter().enumerate() {
-                let (lo, hi) = image_tables[original(k)].bounds();
-                let a = p.point((lo + hi) * 0.5);
-                let b = a + Vec3::new(3.0, -1.0, 0.5);
-                let (want, _) = reference(a, b, Some(k));
-                let got = level.transmittance(a, b, Some(by_node[k]));
-                assert!(
-                    (got - want).abs() < 1e-5 + 0.01 * want,
-                    "from inside {k}: {got} vs {want}"
-                );
-                let (with_self, _) = reference(a, b, None);
-                let got = level.transmittance(a, b, None);
-                assert!(
-                    (got - with_self).abs() < 1e-5 + 0.01 * with_self,
-                    "from inside {k}, not skipped"
-                );
+                if Some(k) == skip {
+                    continue;
+                }
+                let tables = &image_tables[original(k)];
+                let (lo, hi) = tables.bounds();
+                if let Some(share) = chord_share(p, lo, hi, a, b) {
+                    let tau = tables.tau(p.rotation.conjugate() * d);
+                    t *= if share >= 1.0 { tau } else { tau.powf(share) };
+                    crossed += 1;
+                }
             }
-        },
-    )
+            (t, crossed)
+        };
+        let mut crossings = 0;
+        for k in 0..200u32 {
+            let h = |j: u32| ((k * 7919 + j * 104_729) % 1000) as f32 / 1000.0;
+            let a = Vec3::new(-6.0 + 12.0 * h(1), -6.0 + 12.0 * h(2), 0.1 + 1.5 * h(3));
+            let b = Vec3::new(-6.0 + 12.0 * h(4), -6.0 + 12.0 * h(5), 0.1 + 1.5 * h(6));
+            let (want, crossed) = reference(a, b, None);
+            crossings += crossed;
+            let got = level.transmittance(a, b, None);
+            // Partial crossings' shares are sampled in the reference.
+            assert!(
+                (got - want).abs() < 1e-5 + 0.01 * want,
+                "segment {k}: {got} vs {want} ({crossed} boxes)"
+            );
+        }
+        assert!(crossings > 20, "the segments must cross boxes: {crossings}");
+        // From inside an instance with it skipped: the others only.
+        for (k, p) in places.iter().enumerate() {
+            let (lo, hi) = image_tables[original(k)].bounds();
+            let a = p.point((lo + hi) * 0.5);
+            let b = a + Vec3::new(3.0, -1.0, 0.5);
+            let (want, _) = reference(a, b, Some(k));
+            let got = level.transmittance(a, b, Some(by_node[k]));
+            assert!(
+                (got - want).abs() < 1e-5 + 0.01 * want,
+                "from inside {k}: {got} vs {want}"
+            );
+            let (with_self, _) = reference(a, b, None);
+            let got = level.transmittance(a, b, None);
+            assert!(
+                (got - with_self).abs() < 1e-5 + 0.01 * with_self,
+                "from inside {k}, not skipped"
+            );
+        }
+    })
     .unwrap();
 }
 
@@ -412,8 +411,10 @@ fn closed_instances_see_the_sun_through_the_others() {
         .map(|t| DirectionalTables::from_record(&t.record, &t.values, &t.visible).unwrap())
         .collect();
     let original = |k: usize| if (12..14).contains(&k) { 1 } else { 0 };
+    // The others as media (their tau), not with their own polygons.
     let settings = Settings {
         rays: 64,
+        blocking_polygons: 0,
         ..Settings::default()
     };
     let mut ws = vec![0u8; 64 << 20];
@@ -469,4 +470,102 @@ fn closed_instances_see_the_sun_through_the_others() {
     })
     .unwrap();
     assert!(shaded >= 2, "the test must shade some instances: {shaded}");
+}
+
+/// Where the segment `a..b` crosses the triangle `t` (its parameter), by Moller and
+/// Trumbore in f64: a reference that shares no code with the core's watertight test.
+fn segment_triangle(a: Vec3, b: Vec3, t: [Vec3; 3]) -> Option<f64> {
+    let f = |v: Vec3| glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+    let (o, d) = (f(a), f(b) - f(a));
+    let (p0, p1, p2) = (f(t[0]), f(t[1]), f(t[2]));
+    let (e1, e2) = (p1 - p0, p2 - p0);
+    let h = d.cross(e2);
+    let det = e1.dot(h);
+    if det.abs() < 1e-14 {
+        return None;
+    }
+    let s = o - p0;
+    let u = s.dot(h) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    let s_t = e2.dot(q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && s_t > 0.0 && s_t < 1.0).then_some(s_t)
+}
+
+/// Closed instances block with their originals' own polygons, placed (the default): the
+/// leaf's quad under each of its placements, and the shrub's three nested leaves under
+/// each shrub's. Segments through the row against every placed quad, tested apart.
+#[test]
+fn closed_instances_block_with_their_own_polygons() {
+    let (s, places) = scene(12);
+    let bytes = compile(&s).unwrap();
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    let leaf = [
+        Vec3::new(-0.1, -0.1, 0.0),
+        Vec3::new(0.1, -0.1, 0.0),
+        Vec3::new(0.1, 0.1, 0.02),
+        Vec3::new(-0.1, 0.1, 0.02),
+    ];
+    // Every closed instance's quads in the world, by instance (the scene's order).
+    let mut quads: Vec<Vec<[Vec3; 4]>> = Vec::new();
+    for (k, p) in places.iter().enumerate() {
+        if (12..14).contains(&k) {
+            let mut q = Vec::new();
+            for m in 0..3 {
+                let inner = place(Vec3::Z, m as f32, Vec3::new(0.0, 0.0, 0.2 * m as f32), 1.0);
+                q.push(leaf.map(|c| p.point(inner.point(c))));
+            }
+            quads.push(q);
+        } else {
+            quads.push(vec![leaf.map(|c| p.point(c))]);
+        }
+    }
+    let blocked = |a: Vec3, b: Vec3, skip: Option<usize>| -> bool {
+        quads.iter().enumerate().any(|(k, qs)| {
+            Some(k) != skip
+                && qs.iter().any(|q| {
+                    segment_triangle(a, b, [q[0], q[1], q[2]]).is_some()
+                        || segment_triangle(a, b, [q[0], q[2], q[3]]).is_some()
+                })
+        })
+    };
+    let mut ws = vec![0u8; 64 << 20];
+    load_level(
+        &view,
+        &Settings::default(),
+        Instancing::Top,
+        &mut ws,
+        |level| {
+            let mut by_node: Vec<u32> = (0..level.instances()).collect();
+            by_node.sort_by_key(|&i| level.instance(i).node);
+            let (mut hits, mut wrong) = (0, 0);
+            for k in 0..4000u32 {
+                let h = |j: u32| ((k * 7919 + j * 104_729) % 1000) as f32 / 1000.0;
+                // Segments along the row, low over the ground, so that many meet leaves.
+                let a = Vec3::new(-5.0 + 10.0 * h(1), 0.2 + 1.6 * h(2), 0.2 + 0.6 * h(3));
+                let b = Vec3::new(-5.0 + 10.0 * h(4), 0.2 + 1.6 * h(5), 0.2 + 0.6 * h(6));
+                let want = if blocked(a, b, None) { 0.0 } else { 1.0 };
+                let got = level.transmittance(a, b, None);
+                hits += (want == 0.0) as u32;
+                wrong += (got != want) as u32;
+            }
+            assert!(hits > 40, "the segments must meet leaves: {hits}");
+            assert_eq!(
+                wrong, 0,
+                "{wrong} of 4000 segments disagree ({hits} blocked)"
+            );
+            // From a point of each instance's own quad, with it skipped: the others only.
+            for (k, qs) in quads.iter().enumerate() {
+                let a = (qs[0][0] + qs[0][2]) * 0.5;
+                for j in 0..50u32 {
+                    let t = j as f32 * 0.4;
+                    let b = a + Vec3::new(6.0 * t.cos(), 1.0 * t.sin(), 0.3 * (t * 1.7).sin());
+                    let want = if blocked(a, b, Some(k)) { 0.0 } else { 1.0 };
+                    let got = level.transmittance(a, b, Some(by_node[k]));
+                    assert_eq!(got, want, "from instance {k}, segment {j}");
+                }
+            }
+        },
+    )
+    .unwrap();
 }

@@ -8,6 +8,7 @@
 use super::error::HrError;
 use super::state::State;
 use crate::bvh::{Bvh, BvhNode};
+use crate::limits::NONE;
 use glam::Vec3;
 
 /// A `skip` entry that names closed instance `i` is `SKIP_INSTANCE | i`: the segment starts
@@ -144,8 +145,8 @@ pub(crate) fn light_along(
         return 1.0;
     }
     let d = (to - from).normalize_or_zero();
-    // (entry, transmittance, instance), sorted by entry.
-    let mut met: heapless::Vec<(f32, f32, u32), MAX_ALONG> = heapless::Vec::new();
+    // (entry, transmittance, instance, polygon met or NONE), sorted by entry.
+    let mut met: heapless::Vec<(f32, f32, u32, u32), MAX_ALONG> = heapless::Vec::new();
     bvh(st, ws).any_hit(from, to, |i| {
         if i == skip {
             return false;
@@ -158,12 +159,12 @@ pub(crate) fn light_along(
             // Its own polygons: the light of the first one met, nothing through it.
             return g
                 .first_hit(&place, from, to)
-                .is_some_and(|entry| met.push((entry, 0.0, i)).is_err());
+                .is_some_and(|(q, entry)| met.push((entry, 0.0, i, q)).is_err());
         }
         let tau = st.placed(ws, i).tau(d);
         let crossing = crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau);
         if let Some((entry, t)) = crossing
-            && met.push((entry, t, i)).is_err()
+            && met.push((entry, t, i, NONE)).is_err()
         {
             return true;
         }
@@ -175,16 +176,41 @@ pub(crate) fn light_along(
         return through;
     }
     let cells = RADIANCE_GRID.weights(-d);
-    for &(_, t, i) in &met {
+    let noted = |i: u32, band: usize, part: usize| -> f32 {
+        let mut v = 0.0f32;
+        for &(c, cw) in &cells {
+            if cw > 0.0 {
+                v += cw * radiance(st, ws, i, c, band, part);
+            }
+        }
+        v
+    };
+    for &(_, t, i, q) in &met {
         if t < 1.0 {
             let w = weight * through * (1.0 - t);
+            // The polygon met, where the tables keep it apart: its own first scattering,
+            // scaled by all the light over the first scattering that way (the instance's
+            // mean would give a leaf deep inside a neighbour its sunlit top's light).
+            let placed = st.placed(ws, i);
+            let kept = st.slot(ws, st.instance(ws, i).slot).polygons_kept != 0;
+            let own = (q != NONE && kept)
+                .then(|| placed.tables().single())
+                .flatten()
+                .filter(|s| (q as usize) < s.polygons())
+                .and_then(|s| {
+                    let r =
+                        crate::tables::closed::Received::over(&placed, st.received(ws, i)).ok()?;
+                    let (n, _, _) = s.polygon(q as usize, 0);
+                    let side = usize::from(n.dot(placed.local(-d)) < 0.0);
+                    Some((r, side))
+                });
             for (band, o) in out.iter_mut().enumerate() {
-                let mut v = 0.0f32;
-                for &(c, cw) in &cells {
-                    if cw > 0.0 {
-                        v += cw * radiance(st, ws, i, c, band);
+                let v = match &own {
+                    Some((r, side)) if noted(i, band, 1) > 0.0 => {
+                        r.first_radiosity(&placed, q as usize, *side, band) * noted(i, band, 1)
                     }
-                }
+                    _ => noted(i, band, 0),
+                };
                 *o += w * v;
             }
         }
@@ -202,28 +228,32 @@ const RADIANCE_GRID: crate::tables::grid::DirectionGrid =
 
 /// Bytes of the noted radiance of `n` closed instances (see [`note_radiance`]).
 pub(crate) fn radiance_bytes(n: u32, bands: usize) -> usize {
-    n as usize * RADIANCE_GRID.cells() as usize * bands * 4
+    n as usize * RADIANCE_GRID.cells() as usize * bands * 2 * 4
 }
 
-fn radiance_at(st: &State, i: u32, cell: u32, band: usize) -> usize {
+/// Where part `part` (0: the mean radiosity, 1: all the light over the first scattering)
+/// of closed instance `i`'s noted radiance in cell `cell` and band `band` lies.
+fn radiance_at(st: &State, i: u32, cell: u32, band: usize, part: usize) -> usize {
     let cells = RADIANCE_GRID.cells() as usize;
-    st.lay.radiance + 4 * ((i as usize * cells + cell as usize) * st.bands + band)
+    st.lay.radiance + 4 * (((i as usize * cells + cell as usize) * st.bands + band) * 2 + part)
 }
 
-fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize) -> f32 {
-    super::pool::read(ws, radiance_at(st, i, cell, band))
+fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize, part: usize) -> f32 {
+    super::pool::read(ws, radiance_at(st, i, cell, band, part))
 }
 
 /// Notes, for every closed instance, the radiosity (`pi` times the radiance, W/m^2 per
 /// band) its contents show an observer in each cell's direction: its tables' intensity
-/// that way over its cross-section, from the light it holds now. Gather rays read it (see
+/// that way over its cross-section, from the light it holds now; and the ratio of that
+/// intensity to its first scattering's (0 without polygons kept apart), which scales the
+/// first scattering of the one polygon a ray meets. Gather rays read it (see
 /// [`light_along`]) once the level is solved: the tables' sum over all their cells for
 /// every ray was four fifths of a canopy's gather.
 pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
         for cell in 0..RADIANCE_GRID.cells() {
             let o = RADIANCE_GRID.direction(cell);
-            let mut v = [0.0f32; crate::limits::MAX_BANDS];
+            let mut v = [[0.0f32; 2]; crate::limits::MAX_BANDS];
             {
                 let placed = st.placed(ws, i);
                 let shadow = placed.shadow(o);
@@ -231,13 +261,16 @@ pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
                     && shadow > 0.0
                 {
                     for (band, x) in v.iter_mut().enumerate().take(st.bands) {
-                        *x =
-                            core::f32::consts::PI * r.intensity(&placed, o, band).max(0.0) / shadow;
+                        let (all, once) = r.intensity_parts(&placed, o, band);
+                        x[0] = core::f32::consts::PI * all.max(0.0) / shadow;
+                        x[1] = if once > 0.0 { all.max(0.0) / once } else { 0.0 };
                     }
                 }
             }
             for (band, x) in v.iter().enumerate().take(st.bands) {
-                super::pool::write(ws, radiance_at(st, i, cell, band), x);
+                for (part, y) in x.iter().enumerate() {
+                    super::pool::write(ws, radiance_at(st, i, cell, band, part), y);
+                }
             }
         }
     }
@@ -321,7 +354,7 @@ pub(crate) fn first_instance(
             return false;
         }
         let hit = match st.original_geometry(ws, slot) {
-            Some(g) => g.first_hit(&place, from, to),
+            Some(g) => g.first_hit(&place, from, to).map(|(_, t)| t),
             None => {
                 let tau = st.placed(ws, i).tau((to - from).normalize_or_zero());
                 crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau).and_then(

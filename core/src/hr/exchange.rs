@@ -43,13 +43,10 @@ const INTERNAL: u32 = NONE;
 /// A ray's receiver when it met no closed instance first.
 const NOBODY: u32 = (1 << 26) - 1;
 
-/// One entry: the receiver and the cell of the light's direction of travel, and the share
-/// of the emitter's escaping light in that cell it takes.
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-struct Entry {
-    key: u32,
-    share: f32,
+/// Bytes of one entry: the receiver and the cell of the light's direction of travel
+/// (`u32`), then per band the share of the emitter's escaping light in that cell it takes.
+fn entry_bytes(bands: usize) -> usize {
+    4 + 4 * bands
 }
 
 /// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
@@ -58,7 +55,7 @@ fn parts(n: u32, bands: usize) -> [usize; 4] {
     let n = n as usize;
     let heads = 0;
     let entries = heads + up(4 * (n + 1));
-    let power = entries + up(8 * n * RAYS as usize);
+    let power = entries + up(entry_bytes(bands) * n * RAYS as usize);
     let end = power + up(4 * n * CELLS * bands);
     [heads, entries, power, end]
 }
@@ -86,11 +83,17 @@ fn grid() -> DirectionGrid {
 }
 
 /// Where the ray `j` of instance `i` goes: `INTERNAL`, or its receiver (`NOBODY`) << 6 |
-/// the cell of its direction.
-fn trace<V: Visibility + ?Sized>(st: &State, ws: &[u8], ray: &Ray<'_, V>, i: u32, j: u32) -> u32 {
+/// the cell of its direction; and the polygon and side it leaves from.
+fn trace<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    ray: &Ray<'_, V>,
+    i: u32,
+    j: u32,
+) -> (u32, u32, usize) {
     let leaf = st.instance(ws, i);
     let Some(g) = st.original_geometry(ws, leaf.slot) else {
-        return INTERNAL;
+        return (INTERNAL, NONE, 0);
     };
     let place = crate::geometry::Similarity {
         rotation: glam::Quat::from_array(leaf.rotation),
@@ -103,11 +106,11 @@ fn trace<V: Visibility + ?Sized>(st: &State, ws: &[u8], ray: &Ray<'_, V>, i: u32
     let (u, v) = unit2(hash3(h, 2, 0xA2));
     let (du, dv) = unit2(hash3(h, 3, 0xA3));
     let Some(sp) = g.sample(a.min(1.0 - f32::EPSILON), u, v) else {
-        return INTERNAL;
+        return (INTERNAL, NONE, 0);
     };
     let d = super::direct::cosine_direction(sp.normal, du, dv);
     if d == Vec3::ZERO {
-        return INTERNAL;
+        return (INTERNAL, NONE, 0);
     }
     let x = place.point(sp.point);
     let w = place.direction(d).normalize_or_zero();
@@ -115,24 +118,79 @@ fn trace<V: Visibility + ?Sized>(st: &State, ws: &[u8], ray: &Ray<'_, V>, i: u32
     // Its own polygons first (in its frame: the same parameter along the segment).
     let local_end = crate::tables::closed::local_point(&place, end);
     if g.first_hit_local(sp.point, local_end, sp.polygon).is_some() {
-        return INTERNAL;
+        return (INTERNAL, NONE, 0);
     }
     let cell = grid().cell_of(w);
     let wall = ray.first_hit(x, end, [NONE, NONE]).map_or(1.0, |(_, t)| t);
     let to = x + (end - x) * wall;
     let who = super::blockers::first_instance(st, ws, x, to, i, hash3(h, 4, 0xA4))
         .map_or(NOBODY, |(p, _)| p);
-    (who << 6) | cell
+    // The side it leaves: the front where the drawn normal is the polygon's own.
+    let side = usize::from(sp.normal.dot(g.normal(sp.polygon)) < 0.0);
+    ((who << 6) | cell, sp.polygon, side)
+}
+
+/// How bright each of instance `i`'s polygon sides is to the light it sends out, per band:
+/// its first scattering of the direct light plus the mean of all sides' (the light scattered
+/// more than once, spread evenly); 1 everywhere when the tables keep no polygon apart or
+/// nothing is lit. The escaping rays of a cell are weighed by it, so that a neighbour
+/// beside an instance's shaded lower leaves gets less of its light than one beside its
+/// sunlit top.
+fn brightness(st: &State, ws: &[u8], i: u32, q: u32, side: usize, mean: &[f32], out: &mut [f32]) {
+    out.fill(1.0);
+    if q == NONE || mean.iter().all(|&m| m <= 0.0) {
+        return;
+    }
+    let placed = st.placed(ws, i);
+    let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i)) else {
+        return;
+    };
+    for (b, o) in out.iter_mut().enumerate() {
+        *o = r.first_radiosity(&placed, q as usize, side, b) + mean[b];
+    }
+}
+
+/// The area-weighted mean first-scattered radiosity of instance `i`'s polygon sides per
+/// band (W/m^2), or zeros when its tables keep no polygon apart, in the geometry's order.
+fn mean_brightness(st: &State, ws: &[u8], i: u32, out: &mut [f32]) {
+    out.fill(0.0);
+    let leaf = st.instance(ws, i);
+    if st.slot(ws, leaf.slot).polygons_kept == 0 {
+        return;
+    }
+    let placed = st.placed(ws, i);
+    let (Some(single), Ok(r)) = (
+        placed.tables().single(),
+        crate::tables::closed::Received::over(&placed, st.received(ws, i)),
+    ) else {
+        return;
+    };
+    let mut area = 0.0f32;
+    for p in 0..single.polygons() {
+        let (_, a, _) = single.polygon(p, 0);
+        area += 2.0 * a;
+        for (b, o) in out.iter_mut().enumerate() {
+            for side in 0..2 {
+                *o += a * r.first_radiosity(&placed, p, side, b);
+            }
+        }
+    }
+    if area > 0.0 {
+        for o in out.iter_mut() {
+            *o /= area;
+        }
+    }
 }
 
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a State,
     ws: &'a mut [u8],
     vis: &'a Vis<'v, V>,
-    /// The instance whose rays are being gathered: its escaping rays per cell and its hit
-    /// keys so far.
-    escaped: [u32; CELLS],
-    hits: heapless::Vec<u32, { RAYS as usize }>,
+    /// The instance whose rays are being gathered: its escaping rays' weights per cell and
+    /// band, and its hits so far (key, and the ray's index in `weights`).
+    escaped: [[f32; MAX_BANDS]; CELLS],
+    hits: heapless::Vec<(u32, u32), { RAYS as usize }>,
+    weights: [[f32; MAX_BANDS]; RAYS as usize],
     written: u32,
 }
 
@@ -151,20 +209,23 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
     }
     let parts_per = RAYS / PER_CHUNK;
     let chunks = n as usize * parts_per as usize;
+    let nb = st.bands;
+    let per = 1 + nb;
     let mut rays = 0u64;
     let mut ctx = Ctx {
         st,
         ws,
         vis,
-        escaped: [0; CELLS],
+        escaped: [[0.0; MAX_BANDS]; CELLS],
         hits: heapless::Vec::new(),
+        weights: [[0.0; MAX_BANDS]; RAYS as usize],
         written: 0,
     };
     run_chunks(
         ex,
         &mut ctx,
         chunks,
-        PER_CHUNK as usize,
+        PER_CHUNK as usize * per,
         |c: &Ctx<'_, '_, V>, chunk, buf| {
             let i = (chunk / parts_per as usize) as u32;
             let part = (chunk % parts_per as usize) as u32;
@@ -173,31 +234,43 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
                 polys: WsPolygons { st: c.st, ws: c.ws },
             };
             let sends = sends(c.st, c.ws, i);
-            for (k, o) in buf.iter_mut().enumerate() {
-                let r = if sends {
+            let mut mean = [0.0f32; MAX_BANDS];
+            if sends {
+                mean_brightness(c.st, c.ws, i, &mut mean[..nb]);
+            }
+            for (k, o) in buf.chunks_exact_mut(per).enumerate() {
+                let (r, q, side) = if sends {
                     trace(c.st, c.ws, &ray, i, part * PER_CHUNK + k as u32)
                 } else {
-                    INTERNAL
+                    (INTERNAL, NONE, 0)
                 };
-                *o = f32::from_bits(r);
+                o[0] = f32::from_bits(r);
+                if r != INTERNAL {
+                    brightness(c.st, c.ws, i, q, side, &mean[..nb], &mut o[1..]);
+                }
             }
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
             let i = (chunk / parts_per as usize) as u32;
             let part = (chunk % parts_per as usize) as u32;
             if part == 0 {
-                c.escaped = [0; CELLS];
+                c.escaped = [[0.0; MAX_BANDS]; CELLS];
                 c.hits.clear();
             }
-            for &o in buf {
-                let r = o.to_bits();
+            for (k, o) in buf.chunks_exact(per).enumerate() {
+                let r = o[0].to_bits();
                 if r == INTERNAL {
                     continue;
                 }
                 rays += 1;
-                c.escaped[(r & 63) as usize] += 1;
+                let j = (part * PER_CHUNK) as usize + k;
+                let cell = (r & 63) as usize;
+                for (e, w) in c.escaped[cell][..nb].iter_mut().zip(&o[1..]) {
+                    *e += w;
+                }
+                c.weights[j][..nb].copy_from_slice(&o[1..1 + nb]);
                 if r >> 6 != NOBODY {
-                    let _ = c.hits.push(r);
+                    let _ = c.hits.push((r, j as u32));
                 }
             }
             if part + 1 == parts_per {
@@ -216,26 +289,32 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
     st.stats.rays_by_phase.links += rays;
 }
 
-/// Writes instance `i`'s entries from its rays' keys.
+/// Writes instance `i`'s entries from its rays' keys and weights.
 fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
-    let p = parts(c.st.instances, c.st.bands);
+    let nb = c.st.bands;
+    let p = parts(c.st.instances, nb);
     let base = c.st.lay.exchange;
     super::pool::write(c.ws, base + p[0] + 4 * i as usize, &c.written);
     c.hits.sort_unstable();
     let mut k = 0;
     while k < c.hits.len() {
-        let key = c.hits[k];
+        let key = c.hits[k].0;
+        let cell = (key & 63) as usize;
+        let mut share = [0.0f32; MAX_BANDS];
         let mut m = k;
-        while m < c.hits.len() && c.hits[m] == key {
+        while m < c.hits.len() && c.hits[m].0 == key {
+            let j = c.hits[m].1 as usize;
+            for (x, w) in share[..nb].iter_mut().zip(&c.weights[j][..nb]) {
+                *x += w;
+            }
             m += 1;
         }
-        let e = c.escaped[(key & 63) as usize].max(1);
-        let entry = Entry {
-            key,
-            share: (m - k) as f32 / e as f32,
-        };
-        let at = base + p[1] + 8 * c.written as usize;
-        super::pool::write(c.ws, at, &entry);
+        let at = base + p[1] + entry_bytes(nb) * c.written as usize;
+        super::pool::write(c.ws, at, &key);
+        for (b, (&x, &e)) in share[..nb].iter().zip(&c.escaped[cell][..nb]).enumerate() {
+            let v = if e > 0.0 { x / e } else { 0.0 };
+            super::pool::write(c.ws, at + 4 + 4 * b, &v);
+        }
         c.written += 1;
         k = m;
     }
@@ -283,9 +362,10 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             continue;
         };
         for e in first..last {
-            let entry: Entry = super::pool::read(region, p[1] + 8 * e as usize);
-            let cell = (entry.key & 63) as usize;
-            let to = entry.key >> 6;
+            let at = p[1] + entry_bytes(nb) * e as usize;
+            let key: u32 = super::pool::read(region, at);
+            let cell = (key & 63) as usize;
+            let to = key >> 6;
             if to >= n {
                 continue;
             }
@@ -296,10 +376,14 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
                     *s = r.intensity(&placed, d, band).max(0.0) * solid;
                 }
             }
-            let at = power_at(st, to, opposite[cell] as usize) - base;
-            let acc: &mut [f32] = super::pool::floats_mut(region, at, nb);
+            let mut share = [0.0f32; MAX_BANDS];
+            for (band, x) in share.iter_mut().enumerate().take(nb) {
+                *x = super::pool::read(region, at + 4 + 4 * band);
+            }
+            let to_at = power_at(st, to, opposite[cell] as usize) - base;
+            let acc: &mut [f32] = super::pool::floats_mut(region, to_at, nb);
             for (band, v) in acc.iter_mut().enumerate() {
-                *v += sent[cell][band] * entry.share;
+                *v += sent[cell][band] * share[band];
             }
         }
     }

@@ -39,6 +39,32 @@ pub(crate) fn point_of(st: &State, ws: &[u8], i: u32, h: u32) -> Vec3 {
     placed.place().point(lo + (hi - lo) * u)
 }
 
+/// Points of its own polygons a closed instance receives at (see `into_instance`).
+const RECEIVING_POINTS: u32 = 4;
+
+/// Point `j` of `m` on closed instance `i`'s own polygons (world), drawn by area from the
+/// hash `h`, stratified over the `m`; its box's centre when it has none.
+fn surface_point(st: &State, ws: &[u8], i: u32, h: u32, j: u32, m: u32) -> Vec3 {
+    let leaf = st.instance(ws, i);
+    let Some(g) = st.original_geometry(ws, leaf.slot) else {
+        return centre_of(st, ws, i);
+    };
+    let (a0, _) = unit2(hash3(h, 1, 0xC1));
+    let (u, v) = unit2(hash3(h, 2, 0xC2));
+    let a = ((j as f32 + a0) / m.max(1) as f32).min(1.0 - f32::EPSILON);
+    match g.sample(a, u, v) {
+        Some(sp) => {
+            let place = crate::geometry::Similarity {
+                rotation: glam::Quat::from_array(leaf.rotation),
+                translation: leaf.translation.into(),
+                scale: leaf.scale,
+            };
+            place.point(sp.point)
+        }
+        None => centre_of(st, ws, i),
+    }
+}
+
 /// The centre of closed instance `i`'s placed box (m).
 pub(crate) fn centre_of(st: &State, ws: &[u8], i: u32) -> Vec3 {
     let placed = st.placed(ws, i);
@@ -279,7 +305,18 @@ fn into_instance<V: Visibility + ?Sized>(
     rays: u32,
     out: &mut Coefficients,
 ) {
-    let c = centre_of(st, ws, i);
+    // Where it receives: points of its own polygons where it has them (the fluence at its
+    // box's centre, inside a canopy's densest layer, missed what its lowest leaves get from
+    // the soil), else its box's centre.
+    let geometry = st.original_geometry(ws, st.instance(ws, i).slot).is_some();
+    let m = if geometry { RECEIVING_POINTS } else { 1 };
+    let at = |j: u32| {
+        if geometry {
+            surface_point(st, ws, i, hash3(seed, j, 0x3D), j, m)
+        } else {
+            centre_of(st, ws, i)
+        }
+    };
     let from = |j: u32| point_of(st, ws, i, hash3(seed, j, 0x3E));
     match st.shape(ws, emit) {
         Shape::Patch {
@@ -291,66 +328,86 @@ fn into_instance<V: Visibility + ?Sized>(
             ..
         } => {
             let corners = &corners[..n];
-            let Some(s) = facing_side(c, corners[0], normal) else {
-                return;
-            };
-            if s == 1 && !two_sided {
-                return;
+            let per = rays.max(1).div_ceil(m);
+            let (mut sum, mut open, mut dir) = ([0.0f32; 2], 0.0f32, Vec3::ZERO);
+            let mut partial = false;
+            for q in 0..m {
+                let c = at(q);
+                let Some(s) = facing_side(c, corners[0], normal) else {
+                    continue;
+                };
+                if s == 1 && !two_sided {
+                    continue;
+                }
+                // The fluence there per unit radiosity (its solid angle over pi): what the
+                // instance intercepts from every direction the patch covers, not only the
+                // cosine-weighted part on a plane facing it.
+                let (omega, phi) = crate::formfactor::point_polygon_light(c, corners);
+                let f = omega / PI;
+                if f <= 0.0 {
+                    continue;
+                }
+                let mut seen = 0.0f32;
+                for j in 0..per {
+                    let (u, v) = unit2(hash3(seed, q * per + j, 0x3F));
+                    let x = if geometry { c } else { from(j) };
+                    seen +=
+                        vis.transmittance(x, point_on(corners, u, v), [SKIP_INSTANCE | i, poly]);
+                }
+                let v = seen / per as f32;
+                out.rays += per;
+                open += f;
+                sum[s] += f * v;
+                partial |= v < 1.0;
+                // Towards the patch, as long as its light is collimated (see
+                // `instance_light::cone_directions`).
+                dir += phi * (PI * v / omega.max(f32::MIN_POSITIVE)) * f;
             }
-            let mut centre = Vec3::ZERO;
-            for &p in corners {
-                centre += p;
-            }
-            let w = (centre / n as f32 - c).normalize_or_zero();
-            // The fluence at the centre per unit radiosity (its solid angle over pi): what
-            // the instance intercepts from every direction the patch covers, not only the
-            // cosine-weighted part on a plane facing it.
-            let (omega, phi) = crate::formfactor::point_polygon_light(c, corners);
-            let f = omega / PI;
-            if f <= 0.0 {
-                return;
-            }
-            let m = rays.max(1);
-            let mut seen = 0.0f32;
-            for j in 0..m {
-                let (u, v) = unit2(hash3(seed, j, 0x3F));
-                seen +=
-                    vis.transmittance(from(j), point_on(corners, u, v), [SKIP_INSTANCE | i, poly]);
-            }
-            let v = seen / m as f32;
-            out.rays += m;
-            out.open = f;
-            out.k[0][s] = f * v;
-            out.partial = v < 1.0;
-            // Towards the patch, as long as its light is collimated (see
-            // `instance_light::cone_directions`).
-            out.dir = if omega > 0.0 { phi * (PI / omega) } else { w };
+            let total = sum[0] + sum[1];
+            out.open = open / m as f32;
+            out.k[0][0] = sum[0] / m as f32;
+            out.k[0][1] = sum[1] / m as f32;
+            out.partial = partial;
+            out.dir = if total > 0.0 { dir / total } else { Vec3::ZERO };
         }
         Shape::Cluster { min, max, .. } => {
+            let per = rays.max(4).div_ceil(m).max(2);
+            let (mut k, mut open, mut towards) = (0.0f32, 0.0f32, Vec3::ZERO);
+            let mut best = (0.0f32, super::cluster_kernel::Witnesses::EMPTY.pick);
+            for q in 0..m {
+                let c = at(q);
+                // The fluence there: from every side (a cluster around or below the
+                // instance is not cut in half by a plane facing its centre).
+                let (kq, tq, oq, wit) = gathered(
+                    st,
+                    ws,
+                    emit,
+                    c,
+                    Plane::Sphere,
+                    SKIP_INSTANCE | i,
+                    hash3(seed, 0x4E, 1 + q),
+                    per,
+                    true,
+                    vis,
+                );
+                out.rays += per;
+                k += kq;
+                open += oq;
+                towards += tq * kq;
+                if kq > best.0 {
+                    best = (kq, wit.pick);
+                }
+            }
+            let c = centre_of(st, ws, i);
             let w = ((min + max) * 0.5 - c).normalize_or_zero();
-            // The fluence at the centre: from every side (a cluster around or below the
-            // instance is not cut in half by a plane facing its centre).
-            let (k, towards, open, wit) = gathered(
-                st,
-                ws,
-                emit,
-                c,
-                Plane::Sphere,
-                SKIP_INSTANCE | i,
-                hash3(seed, 0x4E, 1),
-                rays.max(4),
-                true,
-                vis,
-            );
-            out.rays += rays.max(4);
-            out.open = open;
-            out.k[0][0] = k;
-            out.partial = k < open;
+            out.open = open / m as f32;
+            out.k[0][0] = k / m as f32;
+            out.partial = out.k[0][0] < out.open;
             out.exact = true;
-            out.witness = wit.pick;
+            out.witness = best.1;
             // The light's mean direction, as long as it is collimated.
-            out.dir = if towards.length_squared() > 0.0 {
-                towards
+            out.dir = if k > 0.0 && towards.length_squared() > 0.0 {
+                towards / k
             } else {
                 w
             };

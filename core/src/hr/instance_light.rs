@@ -52,6 +52,9 @@ fn visible_fraction<V: Visibility + ?Sized>(
     let (lo, hi) = placed.tables().bounds();
     let place = placed.place();
     let n = points(k, st.suns, st.settings.rays);
+    if let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) {
+        return surface_fraction(st, ws, ray, i, k, &g, &place, towards, n);
+    }
     let mut sum = 0.0f32;
     for j in 0..n {
         let local = lo + (hi - lo) * unit3(i, k, j);
@@ -61,6 +64,61 @@ fn visible_fraction<V: Visibility + ?Sized>(
         sum += ray.transmittance_towards(x, end, towards, skip);
     }
     (sum / n as f32, n)
+}
+
+/// [`visible_fraction`] of an instance that blocks with its own polygons: over points of
+/// its polygons (by area, each weighed by its cosine to the source) that its own polygons
+/// leave lit, the share the rest of the level leaves lit too: the part of its lit
+/// cross-section that is lit where it stands (points of its box were lit where its leaves
+/// are not: under a canopy, the open air below its leaves).
+#[allow(clippy::too_many_arguments)]
+fn surface_fraction<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    ray: &Ray<'_, V>,
+    i: u32,
+    k: u32,
+    g: &super::original_geometry::OriginalGeometry<'_>,
+    place: &crate::geometry::Similarity,
+    towards: Vec3,
+    n: u32,
+) -> (f32, u32) {
+    let local = (place.rotation.conjugate() * towards).normalize_or_zero();
+    let tries = 4 * n;
+    let (mut lit, mut open, mut rays) = (0.0f32, 0.0f32, 0u32);
+    for j in 0..tries {
+        let h = hash3(i, k, j ^ 0x5F00_0000);
+        let (a0, _) = crate::sampling::unit2(hash3(h, 1, 0xB1));
+        let (u, v) = crate::sampling::unit2(hash3(h, 2, 0xB2));
+        let a = ((j as f32 + a0) / tries as f32).min(1.0 - f32::EPSILON);
+        let Some(sp) = g.sample(a, u, v) else {
+            continue;
+        };
+        // The side facing the source, weighed by its cosine.
+        let c = g.normal(sp.polygon).dot(local);
+        let w = c.abs();
+        if w <= 0.0 {
+            continue;
+        }
+        let far = st.far / place.scale.max(f32::MIN_POSITIVE);
+        rays += 1;
+        if g.first_hit_local(sp.point, sp.point + local * far, sp.polygon)
+            .is_some()
+        {
+            continue;
+        }
+        open += w;
+        let x = place.point(sp.point);
+        let end = st.beyond(x, towards);
+        let skip = [SKIP_INSTANCE | i, st.source_skip(ws, k, NONE)[1]];
+        rays += 1;
+        lit += w * ray.transmittance_towards(x, end, towards, skip);
+    }
+    if open > 0.0 {
+        (lit / open, rays)
+    } else {
+        (0.0, rays)
+    }
 }
 
 struct Ctx<'a, 'v, V: ?Sized> {

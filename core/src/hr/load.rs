@@ -588,6 +588,20 @@ fn totals(s: &mut State, ws: &[u8], sources: u32) {
             *p += area * (m.emit[0][b] as f64 + m.emit[1][b] as f64);
         }
     }
+    // Closed instances that block with their own polygons cast shadows of their size too
+    // (a soil alone under closed plants would take a plant's shadow in a few samples).
+    for i in 0..s.instances {
+        let leaf = s.instance(ws, i);
+        if let Some(g) = s.original_geometry(ws, leaf.slot) {
+            let scale2 = (leaf.scale as f64) * (leaf.scale as f64);
+            g.each_area(|a| {
+                if a > 0.0 {
+                    log_area += libm::log(a as f64 * scale2);
+                    counted += 1;
+                }
+            });
+        }
+    }
     s.typical_area = if counted > 0 {
         libm::exp(log_area / counted as f64) as f32
     } else {

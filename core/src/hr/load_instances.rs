@@ -158,7 +158,9 @@ fn table_slot<S: SceneSource>(
             visible: visible_at as u64,
             blocking: blocking_at as u64,
             blocking_polygons,
-            reserved: 0,
+            polygons_kept: u32::from(
+                blocking_polygons > 0 && record.scatterers == blocking_polygons,
+            ),
         },
     );
     write(ws, map_at, &slot);

@@ -250,6 +250,25 @@ impl<'a> OriginalGeometry<'a> {
         })
     }
 
+    /// Polygon `q`'s unit front normal (in the original's frame; zero if it has none).
+    pub(crate) fn normal(&self, q: u32) -> Vec3 {
+        let mut c = [Vec3::ZERO; 4];
+        let m = self.vis.polygons().corners(q, &mut c);
+        if m < 3 {
+            return Vec3::ZERO;
+        }
+        (c[1] - c[0]).cross(c[m - 1] - c[0]).normalize_or_zero()
+    }
+
+    /// Calls `f` with each polygon's area (m^2, in the original's frame), in order.
+    pub(crate) fn each_area(&self, mut f: impl FnMut(f32)) {
+        let mut before = 0.0f32;
+        for &s in self.areas {
+            f(s - before);
+            before = s;
+        }
+    }
+
     /// The polygons' total area (m^2, in the original's frame).
     pub(crate) fn area(&self) -> f32 {
         self.areas.last().copied().unwrap_or(0.0)
@@ -315,10 +334,11 @@ impl<'a> OriginalGeometry<'a> {
     }
 
     /// Where the segment `from..to` (world) first meets a polygon of the instance placed by
-    /// `place`: its parameter (0 at `from`, 1 at `to`).
-    pub(crate) fn first_hit(&self, place: &Similarity, from: Vec3, to: Vec3) -> Option<f32> {
+    /// `place`: the polygon (in the original's expanded order) and its parameter (0 at
+    /// `from`, 1 at `to`).
+    pub(crate) fn first_hit(&self, place: &Similarity, from: Vec3, to: Vec3) -> Option<(u32, f32)> {
         let (a, b) = local(place, from, to);
-        self.vis.first_hit(a, b, [NONE, NONE]).map(|(_, t)| t)
+        self.vis.first_hit(a, b, [NONE, NONE])
     }
 }
 

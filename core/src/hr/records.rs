@@ -156,8 +156,9 @@ pub(crate) struct TableSlot {
     pub blocking: u64,
     /// Its polygons, or 0 when its instances block by `tau`.
     pub blocking_polygons: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// 1 when its tables keep each of those polygons' first scattering apart, in the same
+    /// order (a gather ray that meets one reads its own light), else 0.
+    pub polygons_kept: u32,
 }
 
 /// A directional source: a sun or one sky direction.

@@ -286,9 +286,38 @@ impl<S: AsRef<[f32]>> Received<S> {
     /// Intensity (W/sr) that leaves the instance towards the world direction `observer` in
     /// band `band`, from all the light received.
     pub fn intensity(&self, placed: &Placed<'_>, observer: Vec3, band: usize) -> f32 {
+        let (all, _) = self.intensity_parts(placed, observer, band);
+        all
+    }
+
+    /// Polygon `p`'s first-scattered radiosity on side `side` (0 front, 1 back) in band
+    /// `band` (W/m^2): what it reflects and transmits of the light that reached it
+    /// straight from the beams received; 0 when the tables keep no polygon apart.
+    pub fn first_radiosity(&self, placed: &Placed<'_>, p: usize, side: usize, band: usize) -> f32 {
+        let Some(single) = placed.tables.single() else {
+            return 0.0;
+        };
+        if p >= self.polygons || band >= self.bands {
+            return 0.0;
+        }
+        let (_, _, [rho_front, rho_back, tau]) = single.polygon(p, band);
+        let v = self.v();
+        let (front, back) = (
+            v[self.polygon_at(p, 0, band)],
+            v[self.polygon_at(p, 1, band)],
+        );
+        if side == 0 {
+            rho_front * front + tau * back
+        } else {
+            rho_back * back + tau * front
+        }
+    }
+
+    /// [`Self::intensity`] towards `observer` and its part scattered once (W/sr each).
+    pub fn intensity_parts(&self, placed: &Placed<'_>, observer: Vec3, band: usize) -> (f32, f32) {
         let o = placed.local(observer);
         if o == Vec3::ZERO || band >= self.bands {
-            return 0.0;
+            return (0.0, 0.0);
         }
         let t = &placed.tables;
         let phase = t.phase();
@@ -310,6 +339,7 @@ impl<S: AsRef<[f32]>> Received<S> {
             }
         }
         let mut sum = rest * t.shadow(o);
+        let mut once = 0.0f32;
         // The first scattering: each polygon's lit sides as the observer sees them.
         if let Some(single) = t.single() {
             let wo = single.grid().weights(o);
@@ -327,11 +357,12 @@ impl<S: AsRef<[f32]>> Received<S> {
                     rho_back * back + tau * front
                 };
                 if k > 0.0 {
-                    sum += area * co.abs() * single.fraction(&wo, p) * k / core::f32::consts::PI;
+                    once += area * co.abs() * single.fraction(&wo, p) * k / core::f32::consts::PI;
                 }
             }
         }
-        placed.area_scale * sum
+        sum += once;
+        (placed.area_scale * sum, placed.area_scale * once)
     }
 }
 
