@@ -50,19 +50,21 @@ fn entry_bytes(bands: usize) -> usize {
 }
 
 /// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
-/// entries, received power, end.
-fn parts(n: u32, bands: usize) -> [usize; 4] {
+/// entries, per instance and cell its escaping rays (their mean direction and how many,
+/// 4 floats), received power, end.
+fn parts(n: u32, bands: usize) -> [usize; 5] {
     let n = n as usize;
     let heads = 0;
     let entries = heads + up(4 * (n + 1));
-    let power = entries + up(entry_bytes(bands) * n * RAYS as usize);
+    let cells = entries + up(entry_bytes(bands) * n * RAYS as usize);
+    let power = cells + up(16 * n * CELLS);
     let end = power + up(4 * n * CELLS * bands);
-    [heads, entries, power, end]
+    [heads, entries, cells, power, end]
 }
 
 /// Bytes of the region for `n` closed instances (0 without any).
 pub(crate) fn bytes_needed(n: u32, bands: usize) -> usize {
-    if n == 0 { 0 } else { parts(n, bands)[3] }
+    if n == 0 { 0 } else { parts(n, bands)[4] }
 }
 
 /// True when closed instance `i` sends its light to the others through the exchange (it
@@ -90,10 +92,10 @@ fn trace<V: Visibility + ?Sized>(
     ray: &Ray<'_, V>,
     i: u32,
     j: u32,
-) -> (u32, u32, usize) {
+) -> (u32, u32, usize, Vec3) {
     let leaf = st.instance(ws, i);
     let Some(g) = st.original_geometry(ws, leaf.slot) else {
-        return (INTERNAL, NONE, 0);
+        return (INTERNAL, NONE, 0, Vec3::ZERO);
     };
     let place = crate::geometry::Similarity {
         rotation: glam::Quat::from_array(leaf.rotation),
@@ -106,11 +108,11 @@ fn trace<V: Visibility + ?Sized>(
     let (u, v) = unit2(hash3(h, 2, 0xA2));
     let (du, dv) = unit2(hash3(h, 3, 0xA3));
     let Some(sp) = g.sample(a.min(1.0 - f32::EPSILON), u, v) else {
-        return (INTERNAL, NONE, 0);
+        return (INTERNAL, NONE, 0, Vec3::ZERO);
     };
     let d = super::direct::cosine_direction(sp.normal, du, dv);
     if d == Vec3::ZERO {
-        return (INTERNAL, NONE, 0);
+        return (INTERNAL, NONE, 0, Vec3::ZERO);
     }
     let x = place.point(sp.point);
     let w = place.direction(d).normalize_or_zero();
@@ -118,7 +120,7 @@ fn trace<V: Visibility + ?Sized>(
     // Its own polygons first (in its frame: the same parameter along the segment).
     let local_end = crate::tables::closed::local_point(&place, end);
     if g.first_hit_local(sp.point, local_end, sp.polygon).is_some() {
-        return (INTERNAL, NONE, 0);
+        return (INTERNAL, NONE, 0, Vec3::ZERO);
     }
     let cell = grid().cell_of(w);
     let wall = ray.first_hit(x, end, [NONE, NONE]).map_or(1.0, |(_, t)| t);
@@ -127,7 +129,7 @@ fn trace<V: Visibility + ?Sized>(
         .map_or(NOBODY, |(p, _)| p);
     // The side it leaves: the front where the drawn normal is the polygon's own.
     let side = usize::from(sp.normal.dot(g.normal(sp.polygon)) < 0.0);
-    ((who << 6) | cell, sp.polygon, side)
+    ((who << 6) | cell, sp.polygon, side, w)
 }
 
 /// How bright each of instance `i`'s polygon sides is to the light it sends out, per band:
@@ -187,8 +189,10 @@ struct Ctx<'a, 'v, V: ?Sized> {
     ws: &'a mut [u8],
     vis: &'a Vis<'v, V>,
     /// The instance whose rays are being gathered: its escaping rays' weights per cell and
-    /// band, and its hits so far (key, and the ray's index in `weights`).
+    /// band, their directions summed and count per cell, and its hits so far (key, and the
+    /// ray's index in `weights`).
     escaped: [[f32; MAX_BANDS]; CELLS],
+    towards: [[f32; 4]; CELLS],
     hits: heapless::Vec<(u32, u32), { RAYS as usize }>,
     weights: [[f32; MAX_BANDS]; RAYS as usize],
     written: u32,
@@ -210,13 +214,14 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
     let parts_per = RAYS / PER_CHUNK;
     let chunks = n as usize * parts_per as usize;
     let nb = st.bands;
-    let per = 1 + nb;
+    let per = 4 + nb;
     let mut rays = 0u64;
     let mut ctx = Ctx {
         st,
         ws,
         vis,
         escaped: [[0.0; MAX_BANDS]; CELLS],
+        towards: [[0.0; 4]; CELLS],
         hits: heapless::Vec::new(),
         weights: [[0.0; MAX_BANDS]; RAYS as usize],
         written: 0,
@@ -239,14 +244,15 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
                 mean_brightness(c.st, c.ws, i, &mut mean[..nb]);
             }
             for (k, o) in buf.chunks_exact_mut(per).enumerate() {
-                let (r, q, side) = if sends {
+                let (r, q, side, w) = if sends {
                     trace(c.st, c.ws, &ray, i, part * PER_CHUNK + k as u32)
                 } else {
-                    (INTERNAL, NONE, 0)
+                    (INTERNAL, NONE, 0, Vec3::ZERO)
                 };
                 o[0] = f32::from_bits(r);
                 if r != INTERNAL {
-                    brightness(c.st, c.ws, i, q, side, &mean[..nb], &mut o[1..]);
+                    o[1..4].copy_from_slice(&w.to_array());
+                    brightness(c.st, c.ws, i, q, side, &mean[..nb], &mut o[4..]);
                 }
             }
         },
@@ -255,6 +261,7 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
             let part = (chunk % parts_per as usize) as u32;
             if part == 0 {
                 c.escaped = [[0.0; MAX_BANDS]; CELLS];
+                c.towards = [[0.0; 4]; CELLS];
                 c.hits.clear();
             }
             for (k, o) in buf.chunks_exact(per).enumerate() {
@@ -265,10 +272,14 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
                 rays += 1;
                 let j = (part * PER_CHUNK) as usize + k;
                 let cell = (r & 63) as usize;
-                for (e, w) in c.escaped[cell][..nb].iter_mut().zip(&o[1..]) {
+                for (e, w) in c.escaped[cell][..nb].iter_mut().zip(&o[4..]) {
                     *e += w;
                 }
-                c.weights[j][..nb].copy_from_slice(&o[1..1 + nb]);
+                for (t, d) in c.towards[cell].iter_mut().zip(&o[1..4]) {
+                    *t += d;
+                }
+                c.towards[cell][3] += 1.0;
+                c.weights[j][..nb].copy_from_slice(&o[4..4 + nb]);
                 if r >> 6 != NOBODY {
                     let _ = c.hits.push((r, j as u32));
                 }
@@ -295,6 +306,11 @@ fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
     let p = parts(c.st.instances, nb);
     let base = c.st.lay.exchange;
     super::pool::write(c.ws, base + p[0] + 4 * i as usize, &c.written);
+    for (cell, t) in c.towards.iter().enumerate() {
+        let d = Vec3::new(t[0], t[1], t[2]).normalize_or_zero();
+        let v = [d.x, d.y, d.z, t[3]];
+        super::pool::write(c.ws, base + p[2] + 16 * (i as usize * CELLS + cell), &v);
+    }
     c.hits.sort_unstable();
     let mut k = 0;
     while k < c.hits.len() {
@@ -324,7 +340,7 @@ fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
 /// [`gather`], per cell of the direction it came from.
 fn power_at(st: &State, i: u32, cell: usize) -> usize {
     let p = parts(st.instances, st.bands);
-    st.lay.exchange + p[2] + 4 * ((i as usize * CELLS + cell) * st.bands)
+    st.lay.exchange + p[3] + 4 * ((i as usize * CELLS + cell) * st.bands)
 }
 
 /// Hands every closed instance's escaping light to the instances it reaches (see the
@@ -341,9 +357,8 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     // The tables and received light lie before the region, the shares and powers in it.
     let (ws, region) = ws.split_at_mut(base);
     let ws: &[u8] = ws;
-    region[p[2]..p[3]].fill(0);
+    region[p[3]..p[4]].fill(0);
     let grid = grid();
-    let solid = 4.0 * core::f32::consts::PI / CELLS as f32;
     let mut opposite = [0u32; CELLS];
     for (c, o) in opposite.iter_mut().enumerate() {
         *o = grid.cell_of(-grid.direction(c as u32));
@@ -361,6 +376,12 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
         let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, j)) else {
             continue;
         };
+        let leaf = st.instance(ws, j);
+        let Some(g) = st.original_geometry(ws, leaf.slot) else {
+            continue;
+        };
+        // The area its rays are drawn over: every side it has, placed (m^2).
+        let sides_area = g.sides_area() * leaf.scale * leaf.scale;
         for e in first..last {
             let at = p[1] + entry_bytes(nb) * e as usize;
             let key: u32 = super::pool::read(region, at);
@@ -371,9 +392,24 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             }
             if known & (1 << cell) == 0 {
                 known |= 1 << cell;
-                let d = grid.direction(cell as u32);
+                // The power its escaping rays of this cell stand for: its radiance their way
+                // (intensity over cross-section) times the etendue of as many rays drawn
+                // over its sides' area (each ray pi A / RAYS). The cell's solid angle times
+                // the intensity at its centre lost the light of cells across its horizon.
+                let v: [f32; 4] =
+                    super::pool::read(region, p[2] + 16 * (j as usize * CELLS + cell));
+                let d = Vec3::new(v[0], v[1], v[2]);
+                let shadow = placed.shadow(d);
                 for (band, s) in sent[cell].iter_mut().enumerate().take(nb) {
-                    *s = r.intensity(&placed, d, band).max(0.0) * solid;
+                    *s = if shadow > 0.0 && d != Vec3::ZERO {
+                        r.intensity(&placed, d, band).max(0.0) / shadow
+                            * core::f32::consts::PI
+                            * sides_area
+                            * v[3]
+                            / RAYS as f32
+                    } else {
+                        0.0
+                    };
                 }
             }
             let mut share = [0.0f32; MAX_BANDS];

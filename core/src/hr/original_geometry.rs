@@ -7,8 +7,9 @@
 //!
 //! Storage, from a region's first byte: the corners (12 floats per polygon, in the
 //! original's frame, m), the corner counts (one byte each: the count, and [`TWO_SIDED`]),
-//! the polygons' areas summed in order (m^2, for drawing points by area, see
-//! [`OriginalGeometry::sample`]), the BVH's nodes and its order.
+//! the polygons' sides' areas summed in order (m^2, a two-sided polygon's twice, for drawing
+//! points evenly over every side, see [`OriginalGeometry::sample`]), the BVH's nodes and its
+//! order.
 
 use super::error::HrError;
 use super::layout::up;
@@ -160,11 +161,18 @@ pub(crate) fn load<S: SceneSource>(
     // Areas summed in order.
     let areas: &mut [f32] = bytemuck::try_cast_slice_mut(&mut area_bytes[..4 * n as usize])
         .map_err(|_| HrError::SceneTooLarge)?;
+    // Summed by sides: a two-sided polygon's area twice, so that points drawn by it are
+    // spread evenly over every side (see `sample`).
     let mut sum = 0.0f32;
     for (k, a) in areas.iter_mut().enumerate() {
         let mut c = [Vec3::ZERO; 4];
         let m = polys.corners(k as u32, &mut c);
-        sum += area_of(&c[..m]);
+        let sides = if polys.counts[k] & TWO_SIDED != 0 {
+            2.0
+        } else {
+            1.0
+        };
+        sum += sides * area_of(&c[..m]);
         *a = sum;
     }
     let (nodes, rest) = tail.split_at_mut(p[4] - p[3]);
@@ -262,24 +270,31 @@ impl<'a> OriginalGeometry<'a> {
 
     /// Calls `f` with each polygon's area (m^2, in the original's frame), in order.
     pub(crate) fn each_area(&self, mut f: impl FnMut(f32)) {
+        let polys = self.vis.polygons();
         let mut before = 0.0f32;
-        for &s in self.areas {
-            f(s - before);
+        for (k, &s) in self.areas.iter().enumerate() {
+            let sides = if polys.counts[k] & TWO_SIDED != 0 {
+                2.0
+            } else {
+                1.0
+            };
+            f((s - before) / sides);
             before = s;
         }
     }
 
-    /// The polygons' total area (m^2, in the original's frame).
-    pub(crate) fn area(&self) -> f32 {
+    /// The area of the polygons' sides (m^2, in the original's frame): a two-sided polygon's
+    /// twice, as [`Self::sample`] draws its sides.
+    pub(crate) fn sides_area(&self) -> f32 {
         self.areas.last().copied().unwrap_or(0.0)
     }
 
-    /// A point drawn uniformly by area from three numbers in [0, 1): `a` picks the
-    /// polygon and, for a two-sided one, the side (from where `a` falls within the
-    /// polygon's share); `(u, v)` the point on it (uniform on a parallelogram or a
-    /// triangle).
+    /// A point drawn evenly over every side of the polygons from three numbers in [0, 1):
+    /// `a` picks the polygon and, for a two-sided one, the side (from where `a` falls
+    /// within the polygon's share); `(u, v)` the point on it (uniform on a parallelogram or
+    /// a triangle).
     pub(crate) fn sample(&self, a: f32, u: f32, v: f32) -> Option<SurfacePoint> {
-        let total = self.area();
+        let total = self.sides_area();
         if total.is_nan() || total <= 0.0 {
             return None;
         }

@@ -172,13 +172,21 @@ pub fn box_crossing(
 ) -> Option<(f32, f32)> {
     let (s0, s1) = box_chord(lo, hi, place, from, to)?;
     let (a, b) = (s0.max(0.0), s1.min(1.0));
-    (a < b).then(|| (a, share_of(t, s0, s1, a, b)))
+    runs_through(s0, s1).then(|| (a, share_of(t, s0, s1, a, b)))
+}
+
+/// True when the segment's parameters `0..1` run through the chord `s0..s1` of a box: some
+/// of it, or, for a flat box (a single leaf's, of no thickness), its plane within the
+/// segment.
+fn runs_through(s0: f32, s1: f32) -> bool {
+    let (a, b) = (s0.max(0.0), s1.min(1.0));
+    a < b || (s0 == s1 && a > 0.0 && a < 1.0)
 }
 
 /// True when the segment `from..to` (world) runs through some of the box `lo..hi` placed by
-/// `place` (more than touching it).
+/// `place` (more than touching it), or through the plane of a flat box.
 pub fn box_crossed(lo: Vec3, hi: Vec3, place: &Similarity, from: Vec3, to: Vec3) -> bool {
-    box_chord(lo, hi, place, from, to).is_some_and(|(s0, s1)| s0.max(0.0) < s1.min(1.0))
+    box_chord(lo, hi, place, from, to).is_some_and(|(s0, s1)| runs_through(s0, s1))
 }
 
 /// What the contents of the box `lo..hi` (placed by `place`) let through along the segment
