@@ -189,17 +189,15 @@ fn a_closed_instance_sends_its_neighbour_what_the_form_factor_says() {
     for k in 0..pairs {
         // The flat one takes the sun whole (and a little of its neighbour's light back).
         let sun = (SUN * SIDE * SIDE) as f64;
-        for b in 0..2 {
-            let flat = got[2 * k][b];
+        for (b, (&flat, &upright)) in got[2 * k].iter().zip(&got[2 * k + 1]).enumerate() {
             assert!(
                 flat >= sun * 0.99 && flat <= sun * 1.03,
                 "pair {k} band {b}: flat {flat} vs {sun}"
             );
-            let r = got[2 * k + 1][b] / expected[k];
+            let r = upright / expected[k];
             assert!(
                 (r - 1.0).abs() <= 0.25,
-                "pair {k} band {b}: upright {} vs {}",
-                got[2 * k + 1][b],
+                "pair {k} band {b}: upright {upright} vs {}",
                 expected[k]
             );
             ratios.push(r);
