@@ -108,9 +108,8 @@ pub(crate) fn transmittance_towards(
         }
         let (lo, hi, place, slot) = placed_box(st, ws, i);
         if let Some(g) = st.original_geometry(ws, slot) {
-            if crate::tables::closed::box_crossed(lo, hi, &place, from, to)
-                && g.blocks(&place, from, to)
-            {
+            // Its own BVH tests its box first.
+            if g.blocks(&place, from, to) {
                 t = 0.0;
             }
             return t <= 0.0;
@@ -315,14 +314,20 @@ pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [
         if skip.contains(&(SKIP_INSTANCE | i)) {
             return false;
         }
-        // The box first: the tables only for a segment that crosses it.
         let (lo, hi, place, slot) = placed_box(st, ws, i);
-        if crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
-            t *= match st.original_geometry(ws, slot) {
-                Some(g) if g.blocks(&place, from, to) => 0.0,
-                Some(_) => 1.0,
-                None => st.placed(ws, i).transmittance(from, to),
-            };
+        match st.original_geometry(ws, slot) {
+            // Its own BVH tests its box first.
+            Some(g) => {
+                if g.blocks(&place, from, to) {
+                    t = 0.0;
+                }
+            }
+            // The box first: the tables only for a segment that crosses it.
+            None => {
+                if crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
+                    t *= st.placed(ws, i).transmittance(from, to);
+                }
+            }
         }
         t <= 0.0
     });

@@ -179,7 +179,9 @@ where
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     st.stats.emitted_power = st.power;
     ctx.levels += 1;
-    {
+    // The top level's balance stands for the solve (an opened level's would count the light
+    // leaving its box as escaped): measured there only.
+    if depth == 0 {
         let mut seq = Fallback {
             inner: &mut *exec,
             scratch: &mut *scratch,
