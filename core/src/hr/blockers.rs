@@ -337,7 +337,8 @@ pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [
 /// The closed instance the segment `from..to` meets first, but `skip`, and the parameter
 /// where: one with polygons of its own where the segment meets one of them, one without at
 /// its box's entry with probability `1 - t`, `t` what its contents let through along the
-/// segment (decided by the hash `h`, so that the answer is repeatable).
+/// segment (decided by the hash `h`, so that the answer is repeatable); and the polygon met
+/// (`NONE` for one without polygons).
 pub(crate) fn first_instance(
     st: &State,
     ws: &[u8],
@@ -345,11 +346,11 @@ pub(crate) fn first_instance(
     to: Vec3,
     skip: u32,
     h: u32,
-) -> Option<(u32, f32)> {
+) -> Option<(u32, f32, u32)> {
     if st.instances == 0 {
         return None;
     }
-    let mut best: Option<(u32, f32)> = None;
+    let mut best: Option<(u32, f32, u32)> = None;
     bvh(st, ws).any_hit(from, to, |i| {
         if i == skip {
             return false;
@@ -359,21 +360,21 @@ pub(crate) fn first_instance(
             return false;
         }
         let hit = match st.original_geometry(ws, slot) {
-            Some(g) => g.first_hit(&place, from, to).map(|(_, t)| t),
+            Some(g) => g.first_hit(&place, from, to).map(|(q, t)| (t, q)),
             None => {
                 let tau = st.placed(ws, i).tau((to - from).normalize_or_zero());
                 crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau).and_then(
                     |(entry, t)| {
                         let (u, _) = crate::sampling::unit2(crate::sampling::hash3(h, i, 0xF1));
-                        (u >= t).then_some(entry)
+                        (u >= t).then_some((entry, NONE))
                     },
                 )
             }
         };
-        if let Some(t) = hit
-            && best.is_none_or(|(_, b)| t < b)
+        if let Some((t, q)) = hit
+            && best.is_none_or(|(_, b, _)| t < b)
         {
-            best = Some((i, t));
+            best = Some((i, t, q));
         }
         false
     });

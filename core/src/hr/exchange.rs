@@ -44,9 +44,11 @@ const INTERNAL: u32 = NONE;
 const NOBODY: u32 = (1 << 26) - 1;
 
 /// Bytes of one entry: the receiver and the cell of the light's direction of travel
-/// (`u32`), then per band the share of the emitter's escaping light in that cell it takes.
+/// (`u32`: receiver << 6 | cell), where on the receiver (`u32`: its polygon << 1 | side,
+/// `NONE` for a receiver without polygons), then per band the share of the emitter's
+/// escaping light in that cell it takes.
 fn entry_bytes(bands: usize) -> usize {
-    4 + 4 * bands
+    8 + 4 * bands
 }
 
 /// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
@@ -92,10 +94,10 @@ fn trace<V: Visibility + ?Sized>(
     ray: &Ray<'_, V>,
     i: u32,
     j: u32,
-) -> (u32, u32, usize, Vec3) {
+) -> (u32, u32, usize, Vec3, u32) {
     let leaf = st.instance(ws, i);
     let Some(g) = st.original_geometry(ws, leaf.slot) else {
-        return (INTERNAL, NONE, 0, Vec3::ZERO);
+        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     };
     let place = crate::geometry::Similarity {
         rotation: glam::Quat::from_array(leaf.rotation),
@@ -108,11 +110,11 @@ fn trace<V: Visibility + ?Sized>(
     let (u, v) = unit2(hash3(h, 2, 0xA2));
     let (du, dv) = unit2(hash3(h, 3, 0xA3));
     let Some(sp) = g.sample(a.min(1.0 - f32::EPSILON), u, v) else {
-        return (INTERNAL, NONE, 0, Vec3::ZERO);
+        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     };
     let d = super::direct::cosine_direction(sp.normal, du, dv);
     if d == Vec3::ZERO {
-        return (INTERNAL, NONE, 0, Vec3::ZERO);
+        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     }
     let x = place.point(sp.point);
     let w = place.direction(d).normalize_or_zero();
@@ -120,16 +122,28 @@ fn trace<V: Visibility + ?Sized>(
     // Its own polygons first (in its frame: the same parameter along the segment).
     let local_end = crate::tables::closed::local_point(&place, end);
     if g.first_hit_local(sp.point, local_end, sp.polygon).is_some() {
-        return (INTERNAL, NONE, 0, Vec3::ZERO);
+        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     }
     let cell = grid().cell_of(w);
     let wall = ray.first_hit(x, end, [NONE, NONE]).map_or(1.0, |(_, t)| t);
     let to = x + (end - x) * wall;
-    let who = super::blockers::first_instance(st, ws, x, to, i, hash3(h, 4, 0xA4))
-        .map_or(NOBODY, |(p, _)| p);
+    let met = super::blockers::first_instance(st, ws, x, to, i, hash3(h, 4, 0xA4));
+    let who = met.map_or(NOBODY, |(p, _, _)| p);
+    // Where on the receiver: its polygon and the side the ray meets.
+    let at = match met {
+        Some((p, _, q)) if q != NONE => {
+            let pl = st.instance(ws, p);
+            let rot = glam::Quat::from_array(pl.rotation);
+            st.original_geometry(ws, pl.slot).map_or(NONE, |pg| {
+                let n = rot * pg.normal(q);
+                (q << 1) | u32::from(n.dot(w) > 0.0)
+            })
+        }
+        _ => NONE,
+    };
     // The side it leaves: the front where the drawn normal is the polygon's own.
     let side = usize::from(sp.normal.dot(g.normal(sp.polygon)) < 0.0);
-    ((who << 6) | cell, sp.polygon, side, w)
+    ((who << 6) | cell, sp.polygon, side, w, at)
 }
 
 /// How bright each of instance `i`'s polygon sides is to the light it sends out, per band:
@@ -193,7 +207,7 @@ struct Ctx<'a, 'v, V: ?Sized> {
     /// ray's index in `weights`).
     escaped: [[f32; MAX_BANDS]; CELLS],
     towards: [[f32; 4]; CELLS],
-    hits: heapless::Vec<(u32, u32), { RAYS as usize }>,
+    hits: heapless::Vec<(u64, u32), { RAYS as usize }>,
     weights: [[f32; MAX_BANDS]; RAYS as usize],
     written: u32,
 }
@@ -214,7 +228,7 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
     let parts_per = RAYS / PER_CHUNK;
     let chunks = n as usize * parts_per as usize;
     let nb = st.bands;
-    let per = 4 + nb;
+    let per = 5 + nb;
     let mut rays = 0u64;
     let mut ctx = Ctx {
         st,
@@ -244,15 +258,16 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
                 mean_brightness(c.st, c.ws, i, &mut mean[..nb]);
             }
             for (k, o) in buf.chunks_exact_mut(per).enumerate() {
-                let (r, q, side, w) = if sends {
+                let (r, q, side, w, at) = if sends {
                     trace(c.st, c.ws, &ray, i, part * PER_CHUNK + k as u32)
                 } else {
-                    (INTERNAL, NONE, 0, Vec3::ZERO)
+                    (INTERNAL, NONE, 0, Vec3::ZERO, NONE)
                 };
                 o[0] = f32::from_bits(r);
                 if r != INTERNAL {
                     o[1..4].copy_from_slice(&w.to_array());
-                    brightness(c.st, c.ws, i, q, side, &mean[..nb], &mut o[4..]);
+                    o[4] = f32::from_bits(at);
+                    brightness(c.st, c.ws, i, q, side, &mean[..nb], &mut o[5..]);
                 }
             }
         },
@@ -272,16 +287,18 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
                 rays += 1;
                 let j = (part * PER_CHUNK) as usize + k;
                 let cell = (r & 63) as usize;
-                for (e, w) in c.escaped[cell][..nb].iter_mut().zip(&o[4..]) {
+                for (e, w) in c.escaped[cell][..nb].iter_mut().zip(&o[5..]) {
                     *e += w;
                 }
                 for (t, d) in c.towards[cell].iter_mut().zip(&o[1..4]) {
                     *t += d;
                 }
                 c.towards[cell][3] += 1.0;
-                c.weights[j][..nb].copy_from_slice(&o[4..4 + nb]);
+                c.weights[j][..nb].copy_from_slice(&o[5..5 + nb]);
                 if r >> 6 != NOBODY {
-                    let _ = c.hits.push((r, j as u32));
+                    let _ = c
+                        .hits
+                        .push(((r as u64) << 32 | o[4].to_bits() as u64, j as u32));
                 }
             }
             if part + 1 == parts_per {
@@ -314,11 +331,12 @@ fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
     c.hits.sort_unstable();
     let mut k = 0;
     while k < c.hits.len() {
-        let key = c.hits[k].0;
+        let both = c.hits[k].0;
+        let (key, at_on) = ((both >> 32) as u32, both as u32);
         let cell = (key & 63) as usize;
         let mut share = [0.0f32; MAX_BANDS];
         let mut m = k;
-        while m < c.hits.len() && c.hits[m].0 == key {
+        while m < c.hits.len() && c.hits[m].0 == both {
             let j = c.hits[m].1 as usize;
             for (x, w) in share[..nb].iter_mut().zip(&c.weights[j][..nb]) {
                 *x += w;
@@ -327,9 +345,10 @@ fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
         }
         let at = base + p[1] + entry_bytes(nb) * c.written as usize;
         super::pool::write(c.ws, at, &key);
+        super::pool::write(c.ws, at + 4, &at_on);
         for (b, (&x, &e)) in share[..nb].iter().zip(&c.escaped[cell][..nb]).enumerate() {
             let v = if e > 0.0 { x / e } else { 0.0 };
-            super::pool::write(c.ws, at + 4 + 4 * b, &v);
+            super::pool::write(c.ws, at + 8 + 4 * b, &v);
         }
         c.written += 1;
         k = m;
@@ -345,7 +364,9 @@ fn power_at(st: &State, i: u32, cell: usize) -> usize {
 
 /// Hands every closed instance's escaping light to the instances it reaches (see the
 /// module documentation), from the light they hold now: fills the received power of every
-/// instance, which [`receive`] then adds to its light.
+/// instance by cell, and, on instances whose tables keep their polygons apart, the light on
+/// the polygons the rays met (part 2 of their received light), which [`receive`] then adds
+/// to their light.
 pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     let n = st.instances;
     if n == 0 {
@@ -354,82 +375,116 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     let nb = st.bands;
     let p = parts(n, nb);
     let base = st.lay.exchange;
-    // The tables and received light lie before the region, the shares and powers in it.
-    let (ws, region) = ws.split_at_mut(base);
-    let ws: &[u8] = ws;
-    region[p[3]..p[4]].fill(0);
+    ws[base + p[3]..base + p[4]].fill(0);
+    for i in 0..n {
+        st.with_received(ws, i, 2, |_, r| r.clear());
+    }
     let grid = grid();
     let mut opposite = [0u32; CELLS];
     for (c, o) in opposite.iter_mut().enumerate() {
         *o = grid.cell_of(-grid.direction(c as u32));
     }
     for j in 0..n {
-        let first: u32 = super::pool::read(region, p[0] + 4 * j as usize);
-        let last: u32 = super::pool::read(region, p[0] + 4 * (j as usize + 1));
+        let first: u32 = super::pool::read(ws, base + p[0] + 4 * j as usize);
+        let last: u32 = super::pool::read(ws, base + p[0] + 4 * (j as usize + 1));
         if first >= last {
             continue;
         }
-        // The escaping power per cell, computed the first time a cell is needed.
-        let mut sent = [[0.0f32; MAX_BANDS]; CELLS];
-        let mut known = 0u64;
-        let placed = st.placed(ws, j);
-        let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, j)) else {
+        let Some(sent) = escaping(st, ws, j, &p) else {
             continue;
         };
-        let leaf = st.instance(ws, j);
-        let Some(g) = st.original_geometry(ws, leaf.slot) else {
-            continue;
-        };
-        // The area its rays are drawn over: every side it has, placed (m^2).
-        let sides_area = g.sides_area() * leaf.scale * leaf.scale;
         for e in first..last {
-            let at = p[1] + entry_bytes(nb) * e as usize;
-            let key: u32 = super::pool::read(region, at);
+            let at = base + p[1] + entry_bytes(nb) * e as usize;
+            let key: u32 = super::pool::read(ws, at);
+            let on: u32 = super::pool::read(ws, at + 4);
             let cell = (key & 63) as usize;
             let to = key >> 6;
             if to >= n {
                 continue;
             }
-            if known & (1 << cell) == 0 {
-                known |= 1 << cell;
-                // The power its escaping rays of this cell stand for: its radiance their way
-                // (intensity over cross-section) times the etendue of as many rays drawn
-                // over its sides' area (each ray pi A / RAYS). The cell's solid angle times
-                // the intensity at its centre lost the light of cells across its horizon.
-                let v: [f32; 4] =
-                    super::pool::read(region, p[2] + 16 * (j as usize * CELLS + cell));
-                let d = Vec3::new(v[0], v[1], v[2]);
-                let shadow = placed.shadow(d);
-                for (band, s) in sent[cell].iter_mut().enumerate().take(nb) {
-                    *s = if shadow > 0.0 && d != Vec3::ZERO {
-                        r.intensity(&placed, d, band).max(0.0) / shadow
-                            * core::f32::consts::PI
-                            * sides_area
-                            * v[3]
-                            / RAYS as f32
-                    } else {
-                        0.0
+            let mut power = [0.0f32; MAX_BANDS];
+            for (band, x) in power.iter_mut().enumerate().take(nb) {
+                let share: f32 = super::pool::read(ws, at + 8 + 4 * band);
+                *x = sent[cell][band] * share;
+            }
+            let acc: &mut [f32] =
+                super::pool::floats_mut(ws, power_at(st, to, opposite[cell] as usize), nb);
+            for (a, x) in acc.iter_mut().zip(&power) {
+                *a += x;
+            }
+            // Where it lands: the polygon met, as irradiance on its side.
+            if on != NONE && keeps_polygons(st, ws, to) {
+                let (q, side) = ((on >> 1) as usize, (on & 1) as usize);
+                let leaf = st.instance(ws, to);
+                st.with_received(ws, to, 2, |placed, r| {
+                    let Some(single) = placed.tables().single() else {
+                        return;
                     };
-                }
-            }
-            let mut share = [0.0f32; MAX_BANDS];
-            for (band, x) in share.iter_mut().enumerate().take(nb) {
-                *x = super::pool::read(region, at + 4 + 4 * band);
-            }
-            let to_at = power_at(st, to, opposite[cell] as usize) - base;
-            let acc: &mut [f32] = super::pool::floats_mut(region, to_at, nb);
-            for (band, v) in acc.iter_mut().enumerate() {
-                *v += sent[cell][band] * share[band];
+                    if q >= single.polygons() {
+                        return;
+                    }
+                    let area = single.polygon(q, 0).1 * leaf.scale * leaf.scale;
+                    if area > 0.0 {
+                        for (band, x) in power.iter().enumerate().take(nb) {
+                            r.add_first(q, side, band, x / area);
+                        }
+                    }
+                });
             }
         }
     }
 }
 
+/// True when closed instance `i`'s tables keep its polygons apart, in the order of its own
+/// polygons (the exchange hands it its light polygon by polygon).
+fn keeps_polygons(st: &State, ws: &[u8], i: u32) -> bool {
+    st.slot(ws, st.instance(ws, i).slot).polygons_kept != 0
+}
+
+/// The power (W per band) closed instance `j`'s escaping rays of each cell stand for, from
+/// the light it holds now: its radiance their way (intensity over cross-section) times the
+/// etendue of as many rays drawn over its sides' area (each ray pi A / RAYS). The cell's
+/// solid angle times the intensity at its centre lost the light of cells across a flat
+/// emitter's horizon. `None` without polygons of its own.
+fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 5]) -> Option<[[f32; MAX_BANDS]; CELLS]> {
+    let nb = st.bands;
+    let base = st.lay.exchange;
+    let placed = st.placed(ws, j);
+    let r = crate::tables::closed::Received::over(&placed, st.received(ws, j)).ok()?;
+    let leaf = st.instance(ws, j);
+    let g = st.original_geometry(ws, leaf.slot)?;
+    let sides_area = g.sides_area() * leaf.scale * leaf.scale;
+    let mut sent = [[0.0f32; MAX_BANDS]; CELLS];
+    for (cell, s) in sent.iter_mut().enumerate() {
+        let v: [f32; 4] = super::pool::read(ws, base + p[2] + 16 * (j as usize * CELLS + cell));
+        let d = Vec3::new(v[0], v[1], v[2]);
+        if v[3] <= 0.0 || d == Vec3::ZERO {
+            continue;
+        }
+        let shadow = placed.shadow(d);
+        if shadow <= 0.0 {
+            continue;
+        }
+        for (band, x) in s.iter_mut().enumerate().take(nb) {
+            *x = r.intensity(&placed, d, band).max(0.0) / shadow
+                * core::f32::consts::PI
+                * sides_area
+                * v[3]
+                / RAYS as f32;
+        }
+    }
+    Some(sent)
+}
+
 /// Adds to part `part` of closed instance `i`'s received light what the last [`gather`]
-/// handed it, beam by beam (each cell's power over its cross-section that way).
+/// handed it, beam by beam (each cell's power over its cross-section that way); where its
+/// tables keep its polygons apart, their first scattering from where the rays landed, not
+/// from the beams (a neighbour's light reaches its leaves inside the neighbour's box, which
+/// light from beyond the box would not).
 pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
     let nb = st.bands;
     let grid = grid();
+    let landed = keeps_polygons(st, ws, i);
     for cell in 0..CELLS {
         let mut e = [0.0f32; MAX_BANDS];
         let power = super::pool::floats(ws, power_at(st, i, cell), nb);
@@ -444,9 +499,31 @@ pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
                 for v in &mut e[..nb] {
                     *v /= s;
                 }
-                r.receive(placed, d, &e[..nb]);
+                if landed {
+                    r.receive_spread(placed, d, &e[..nb]);
+                } else {
+                    r.receive(placed, d, &e[..nb]);
+                }
             }
         });
+    }
+    if landed {
+        let (from, n) = st.received_at(ws, i, 2);
+        let (to, _) = st.received_at(ws, i, part);
+        let range = {
+            let placed = st.placed(ws, i);
+            match crate::tables::closed::Received::over(&placed, super::pool::floats(ws, from, n)) {
+                Ok(r) => r.first_range(),
+                Err(_) => return,
+            }
+        };
+        for k in range {
+            let v: f32 = super::pool::read(ws, from + 4 * k);
+            if v != 0.0 {
+                let w: f32 = super::pool::read(ws, to + 4 * k);
+                super::pool::write(ws, to + 4 * k, &(w + v));
+            }
+        }
     }
 }
 

@@ -40,8 +40,8 @@ pub(super) fn add_instance<S: SceneSource>(
         return Err(HrError::SceneTooLarge);
     }
     s.instances += 1;
-    // The direct light, then all the light (see `State::received`).
-    let received = 2 * received_floats(&record);
+    // The direct light, all the light, the exchange's (see `State::received_at`).
+    let received = super::state::RECEIVED_PARTS * received_floats(&record);
     if s.received_floats + received > lay.n_received_floats() {
         return Err(HrError::SceneTooLarge);
     }

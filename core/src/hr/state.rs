@@ -93,6 +93,9 @@ pub(crate) struct State {
     pub stats: Stats,
 }
 
+/// Parts of a closed instance's received light (see [`State::received_at`]).
+pub(crate) const RECEIVED_PARTS: usize = 3;
+
 /// Geometry of an element, as the evaluation needs it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Shape {
@@ -515,7 +518,8 @@ impl State {
 
     /// Where closed instance `i`'s received light lies: the float offset in the received
     /// region of part `part` (0: the direct light of suns and sky, fixed once lit; 1: all
-    /// the light, direct and through links) and its length.
+    /// the light, direct and through links; 2: the exchange's light on its polygons kept
+    /// apart, see `exchange`; [`RECEIVED_PARTS`] in all) and its length.
     pub(crate) fn received_at(&self, ws: &[u8], i: u32, part: usize) -> (usize, usize) {
         let leaf = self.instance(ws, i);
         let n = self.placed(ws, i).received_len();

@@ -298,6 +298,24 @@ impl<S: AsRef<[f32]>> Received<S> {
         all
     }
 
+    /// Where the irradiance of the polygons kept apart lies among the floats of storage (see
+    /// [`Placed::received_len`]): every polygon's, side by side and band by band, in one
+    /// range, so that a caller can add one instance's to another's as plain floats.
+    pub fn first_range(&self) -> core::ops::Range<usize> {
+        let start = 2 * self.bands;
+        start..start + self.polygons * 2 * self.bands
+    }
+
+    /// The irradiance (W/m^2) on side `side` of polygon `p` kept apart in band `band`, 0
+    /// when there is no such polygon.
+    pub fn first_irradiance(&self, p: usize, side: usize, band: usize) -> f32 {
+        if p < self.polygons && band < self.bands && side < 2 {
+            self.v()[self.polygon_at(p, side, band)]
+        } else {
+            0.0
+        }
+    }
+
     /// Polygon `p`'s first-scattered radiosity on side `side` (0 front, 1 back) in band
     /// `band` (W/m^2): what it reflects and transmits of the light that reached it
     /// straight from the beams received; 0 when the tables keep no polygon apart.
@@ -398,6 +416,33 @@ impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
     /// world direction `towards` (towards the source). Non-finite or negative values and a
     /// zero direction add nothing.
     pub fn receive(&mut self, placed: &Placed<'_>, towards: Vec3, irradiance: &[f32]) {
+        self.receive_parts(placed, towards, irradiance, true);
+    }
+
+    /// [`Self::receive`] without the first scattering polygon by polygon: for a caller that
+    /// knows where the beam's light lands on the polygons and adds it with
+    /// [`Self::add_first`] (the light between neighbours whose boxes overlap does not come
+    /// from beyond the box).
+    pub fn receive_spread(&mut self, placed: &Placed<'_>, towards: Vec3, irradiance: &[f32]) {
+        self.receive_parts(placed, towards, irradiance, false);
+    }
+
+    /// Adds `irradiance` (W/m^2) in band `band` to side `side` of polygon `p` kept apart
+    /// (its first scattering's light; nothing when there is no such polygon).
+    pub fn add_first(&mut self, p: usize, side: usize, band: usize, irradiance: f32) {
+        if p < self.polygons && band < self.bands && side < 2 && irradiance.is_finite() {
+            let at = self.polygon_at(p, side, band);
+            self.values.as_mut()[at] += irradiance;
+        }
+    }
+
+    fn receive_parts(
+        &mut self,
+        placed: &Placed<'_>,
+        towards: Vec3,
+        irradiance: &[f32],
+        first: bool,
+    ) {
         let d = placed.local(towards);
         if d == Vec3::ZERO {
             return;
@@ -428,7 +473,7 @@ impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
                 v[at] += e * w;
             }
             // The first scattering, polygon by polygon.
-            if let (Some(single), Some(wd)) = (single, wd.as_ref()) {
+            if let (true, Some(single), Some(wd)) = (first, single, wd.as_ref()) {
                 for p in 0..polygons {
                     let (n, _, _) = single.polygon(p, band);
                     let cd = n.dot(d);

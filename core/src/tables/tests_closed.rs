@@ -415,3 +415,58 @@ fn a_segment_is_attenuated_by_the_share_of_the_chord_it_runs() {
         assert_eq!(miss, 1.0);
     }
 }
+
+/// A beam received spread (no first scattering) and its polygons' light added where it
+/// lands is the beam received whole, when what is added is what the beam would have given
+/// each polygon; without it, the first scattering is missing and nothing else.
+#[test]
+fn a_beam_spread_and_its_polygons_lit_apart_is_the_beam() {
+    let sides = (8, 4, 8, 8);
+    let polys = 5usize;
+    let s = storage(sides.0, sides.1, sides.2, sides.3, polys as u32);
+    let t = tables(&s, sides, polys);
+    for place in placements() {
+        let placed = Placed::new(t, place);
+        for (i, d) in spread(6, 0.7).enumerate() {
+            let e = [2.0 + i as f32, 40.0 * noise(i as u32, 3)];
+            let mut whole_v = vec![0.0f32; placed.received_len()];
+            let mut whole = Received::new(&placed, &mut whole_v).unwrap();
+            whole.receive(&placed, d, &e);
+            let mut spread_v = vec![0.0f32; placed.received_len()];
+            let mut parts = Received::new(&placed, &mut spread_v).unwrap();
+            parts.receive_spread(&placed, d, &e);
+            // Nothing on the polygons yet: the rest and the totals only.
+            for band in 0..BANDS {
+                assert_eq!(parts.intercepted(band), whole.intercepted(band));
+                assert_eq!(parts.scattered(band), whole.scattered(band));
+                for p in 0..polys {
+                    for side in 0..2 {
+                        assert_eq!(parts.first_irradiance(p, side, band), 0.0);
+                    }
+                }
+            }
+            let mut lit = 0.0f32;
+            for band in 0..BANDS {
+                for p in 0..polys {
+                    for side in 0..2 {
+                        let v = whole.first_irradiance(p, side, band);
+                        lit += v;
+                        parts.add_first(p, side, band, v);
+                    }
+                }
+            }
+            assert!(lit > 0.0, "the beam lights some polygon");
+            for band in 0..BANDS {
+                for o in spread(20, 0.2) {
+                    let (a, b) = (
+                        parts.intensity(&placed, o, band),
+                        whole.intensity(&placed, o, band),
+                    );
+                    assert!((a - b).abs() <= 1e-5 * b.abs().max(1e-6), "{a} vs {b}");
+                }
+            }
+            assert_eq!(parts.first_range(), whole.first_range());
+            assert_eq!(parts.first_range().len(), polys * 2 * BANDS);
+        }
+    }
+}
