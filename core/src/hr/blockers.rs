@@ -98,9 +98,8 @@ pub(crate) fn transmittance_towards(
     if st.instances == 0 {
         return 1.0;
     }
-    let Some(k) = source_of(st, ws, towards) else {
-        return transmittance(st, ws, from, to, skip);
-    };
+    // The source, found the first time an instance without polygons needs its tau.
+    let mut source: Option<Option<u32>> = None;
     let mut t = 1.0f32;
     bvh(st, ws).any_hit(from, to, |i| {
         if skip.contains(&(SKIP_INSTANCE | i)) {
@@ -114,10 +113,22 @@ pub(crate) fn transmittance_towards(
             }
             return t <= 0.0;
         }
-        let at = st.lay.source_tau + 4 * (i as usize * st.sources as usize + k as usize);
-        let tau: f32 = super::pool::read(ws, at);
-        // The box and the transform alone: the tau is known.
-        t *= crate::tables::closed::box_transmittance(lo, hi, &place, from, to, tau);
+        let k = *source.get_or_insert_with(|| source_of(st, ws, towards));
+        t *= match k {
+            Some(k) => {
+                let at = st.lay.source_tau + 4 * (i as usize * st.sources as usize + k as usize);
+                let tau: f32 = super::pool::read(ws, at);
+                // The box and the transform alone: the tau is known.
+                crate::tables::closed::box_transmittance(lo, hi, &place, from, to, tau)
+            }
+            None => {
+                if crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
+                    st.placed(ws, i).transmittance(from, to)
+                } else {
+                    1.0
+                }
+            }
+        };
         t <= 0.0
     });
     t.max(0.0)
