@@ -2,17 +2,18 @@
 //! level, issue 18): a lit square sends its neighbour what the form factor between them
 //! says, computed here by a double integral that shares no code with the solver.
 
+mod common;
+
 use glam::{Quat, Vec3};
 use hirad::generate::palette::diffuse;
 use hirad::generate::shapes::add_quad;
 use hirad::scene::{Cluster, InstanceOf, Original, Scene, Similarity, compile};
 use hirad::solve::RayonExecutor;
-use hirad::tables::{TableSettings, bake_original};
+use hirad::tables::bake_original;
 use hirad_core::hr::level_probe::solve_level;
 use hirad_core::hr::{Instancing, Settings};
 use hirad_core::image::{LightData, SceneView, SliceSource};
 use hirad_core::sink::{PolygonResult, Sink};
-use hirad_core::tables::bake::TauSettings;
 use hirad_core::tables::closed::Received;
 
 /// Reflectance of the squares (both bands).
@@ -143,24 +144,7 @@ fn a_closed_instance_sends_its_neighbour_what_the_form_factor_says() {
         irradiance: [SUN, SUN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     });
     let mut exec = RayonExecutor::new(2).unwrap();
-    let settings = TableSettings {
-        tau: TauSettings {
-            rays: 64,
-            target: 0.02,
-            checks: 16,
-            seed: 1,
-        },
-        tau_check_rays: 128,
-        max_tau_side: 32,
-        max_side: 8,
-        first_out_side: 8,
-        max_out_side: 8,
-        first_single_side: 32,
-        max_single_side: 64,
-        checks: 4,
-        out_checks: 4,
-        ..TableSettings::default()
-    };
+    let settings = common::quick_tables();
     let t = bake_original(&s, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
     s.tables = vec![t.to_scene()];
     let bytes = compile(&s).unwrap();

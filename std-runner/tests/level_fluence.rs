@@ -3,17 +3,18 @@
 //! not the irradiance of a plane facing the soil's centre. The reference is a double
 //! integral over the soil's lit part that shares no code with the solver.
 
+mod common;
+
 use glam::{Quat, Vec3};
 use hirad::generate::palette::diffuse;
 use hirad::generate::shapes::add_quad;
 use hirad::scene::{Cluster, InstanceOf, Original, Scene, Similarity, compile};
 use hirad::solve::RayonExecutor;
-use hirad::tables::{TableSettings, bake_original};
+use hirad::tables::bake_original;
 use hirad_core::hr::level_probe::solve_level;
 use hirad_core::hr::{Instancing, Settings};
 use hirad_core::image::{LightData, SceneView, SliceSource};
 use hirad_core::sink::{PolygonResult, Sink};
-use hirad_core::tables::bake::TauSettings;
 use hirad_core::tables::closed::Received;
 
 /// The soil's reflectance (both bands) and the sun's irradiance (W/m^2).
@@ -95,24 +96,7 @@ fn a_closed_square_over_the_soil_takes_the_soil_light_its_face_sees() {
             towards: sun,
             irradiance: [SUN, SUN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         });
-        let settings = TableSettings {
-            tau: TauSettings {
-                rays: 64,
-                target: 0.02,
-                checks: 16,
-                seed: 1,
-            },
-            tau_check_rays: 128,
-            max_tau_side: 32,
-            max_side: 8,
-            first_out_side: 8,
-            max_out_side: 8,
-            first_single_side: 32,
-            max_single_side: 64,
-            checks: 4,
-            out_checks: 4,
-            ..TableSettings::default()
-        };
+        let settings = common::quick_tables();
         let mut exec = RayonExecutor::new(2).unwrap();
         let t = bake_original(&scene, 0, &settings, &mut exec, &mut |_, _, _| {}).unwrap();
         scene.tables = vec![t.to_scene()];

@@ -2,6 +2,8 @@
 //! the same scene expanded: what each plant absorbs, what the soil receives, and the power
 //! balance.
 
+mod common;
+
 use glam::{Quat, Vec3};
 use hirad::generate::palette::{diffuse, two_sided};
 use hirad::generate::shapes::{add_quad, frame};
@@ -12,7 +14,6 @@ use hirad_core::hr::level_probe::solve_level;
 use hirad_core::hr::{Instancing, Settings};
 use hirad_core::image::{LightData, SceneView, SliceSource};
 use hirad_core::sink::{PolygonResult, Sink};
-use hirad_core::tables::bake::TauSettings;
 use hirad_core::tables::closed::Received;
 
 const RHO: [f32; 2] = [0.08, 0.45];
@@ -121,24 +122,7 @@ impl Sink for Absorbed {
 }
 
 fn tables_settings() -> TableSettings {
-    TableSettings {
-        tau: TauSettings {
-            rays: 64,
-            target: 0.02,
-            checks: 16,
-            seed: 1,
-        },
-        tau_check_rays: 128,
-        max_tau_side: 32,
-        max_side: 8,
-        first_out_side: 8,
-        max_out_side: 8,
-        first_single_side: 32,
-        max_single_side: 64,
-        checks: 4,
-        out_checks: 4,
-        ..TableSettings::default()
-    }
+    common::quick_tables()
 }
 
 /// What each plant absorbs and what the soil absorbs, per band (W), and the stats: the

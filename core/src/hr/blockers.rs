@@ -290,11 +290,7 @@ pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
 fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity, u32) {
     let leaf = st.instance(ws, i);
     let r = st.slot(ws, leaf.slot).record;
-    let place = crate::geometry::Similarity {
-        rotation: glam::Quat::from_array(leaf.rotation),
-        translation: leaf.translation.into(),
-        scale: leaf.scale,
-    };
+    let place = leaf.place();
     (Vec3::from(r.lo), Vec3::from(r.hi), place, leaf.slot)
 }
 

@@ -99,11 +99,7 @@ fn trace<V: Visibility + ?Sized>(
     let Some(g) = st.original_geometry(ws, leaf.slot) else {
         return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     };
-    let place = crate::geometry::Similarity {
-        rotation: glam::Quat::from_array(leaf.rotation),
-        translation: leaf.translation.into(),
-        scale: leaf.scale,
-    };
+    let place = leaf.place();
     let h = hash3(i, j, 0xE8C4);
     let (a0, _) = unit2(hash3(h, 1, 0xA1));
     let a = (j as f32 + a0) / RAYS as f32;

@@ -54,11 +54,7 @@ fn surface_point(st: &State, ws: &[u8], i: u32, h: u32, j: u32, m: u32) -> Vec3 
     let a = ((j as f32 + a0) / m.max(1) as f32).min(1.0 - f32::EPSILON);
     match g.sample(a, u, v) {
         Some(sp) => {
-            let place = crate::geometry::Similarity {
-                rotation: glam::Quat::from_array(leaf.rotation),
-                translation: leaf.translation.into(),
-                scale: leaf.scale,
-            };
+            let place = leaf.place();
             place.point(sp.point)
         }
         None => centre_of(st, ws, i),

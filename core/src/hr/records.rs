@@ -143,6 +143,17 @@ pub(crate) struct InstanceLeaf {
     pub area_ref: f32,
 }
 
+impl InstanceLeaf {
+    /// Its transform to world.
+    pub(crate) fn place(&self) -> crate::geometry::Similarity {
+        crate::geometry::Similarity {
+            rotation: glam::Quat::from_array(self.rotation),
+            translation: self.translation.into(),
+            scale: self.scale,
+        }
+    }
+}
+
 /// The tables of one original with closed instances, read into the workspace: its record
 /// and where its values (f32) and visible fractions (bytes) lie (byte offsets); and where
 /// its own polygons lie when its instances block with them (see `original_geometry`).

@@ -508,11 +508,7 @@ impl State {
         let v0 = slot.visible as usize - base;
         let visible = &part[v0..v0 + r.visible_bytes() as usize];
         let tables = crate::tables::directional::DirectionalTables::trusted(r, values, visible);
-        let place = crate::geometry::Similarity {
-            rotation: glam::Quat::from_array(leaf.rotation),
-            translation: leaf.translation.into(),
-            scale: leaf.scale,
-        };
+        let place = leaf.place();
         crate::tables::closed::Placed::new(tables, place)
     }
 

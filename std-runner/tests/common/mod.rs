@@ -86,3 +86,26 @@ pub fn canopy(dir: &Path, rows: u32, plants: u32) -> PathBuf {
     ]);
     scene
 }
+
+/// Directional-table settings coarse enough for a test's small originals (a few seconds to
+/// bake): tau to 2% on grids up to 32, phase up to 8, first scattering up to 64.
+pub fn quick_tables() -> hirad::tables::TableSettings {
+    hirad::tables::TableSettings {
+        tau: hirad_core::tables::bake::TauSettings {
+            rays: 64,
+            target: 0.02,
+            checks: 16,
+            seed: 1,
+        },
+        tau_check_rays: 128,
+        max_tau_side: 32,
+        max_side: 8,
+        first_out_side: 8,
+        max_out_side: 8,
+        first_single_side: 32,
+        max_single_side: 64,
+        checks: 4,
+        out_checks: 4,
+        ..hirad::tables::TableSettings::default()
+    }
+}
