@@ -168,7 +168,7 @@ pub(crate) fn traced<V: Visibility + ?Sized>(
                 let (u, v) = unit2(hash3(leaf.0, j, 0x5A1 + side as u32));
                 let y = point_on(&corners[..n], u, v);
                 let (a, c) = unit2(hash3(leaf.0, j, 0x5B2 + side as u32));
-                let d = super::direct::cosine_direction(ns, a, c);
+                let d = super::sample::cosine_direction(ns, a, c);
                 let end = st.beyond(y, d);
                 let add = |to: &mut [f64; 8]| {
                     for (t, e) in to.iter_mut().zip(&each[..nb]) {

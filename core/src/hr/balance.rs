@@ -323,7 +323,7 @@ fn fates<V: Visibility + ?Sized>(
         // Directions are stratified too, in an order shuffled against the points' (a stride
         // coprime with the cell count), so that neither pairs with the other.
         let cells = grid * grid;
-        let stride = super::direct::coprime_stride(cells, hash3(seed, 0, 0x44));
+        let stride = super::sample::coprime_stride(cells, hash3(seed, 0, 0x44));
         for j in 0..rays {
             let (pu, pv) = unit2(hash3(seed, j, 0x11));
             let cell = j % (grid * grid);
@@ -335,7 +335,7 @@ fn fates<V: Visibility + ?Sized>(
             // Directions stratified in the other order, so points and directions do not pair.
             let dc = ((cell as u64 * stride as u64 + (j / cells) as u64) % cells as u64) as u32;
             let (du, dv) = unit2(hash3(seed, j, 0x22));
-            let d = super::direct::cosine_direction(
+            let d = super::sample::cosine_direction(
                 nr,
                 ((dc % grid) as f32 + du) / grid as f32,
                 ((dc / grid) as f32 + dv) / grid as f32,

@@ -121,7 +121,7 @@ pub fn probe_gather<V: Visibility + ?Sized>(
     let mut hits = 0u32;
     for j in 0..rays {
         let (u, v) = crate::sampling::unit2(crate::sampling::hash3(j, 99, 3));
-        let d = direct::cosine_direction(n, u, v);
+        let d = super::sample::cosine_direction(n, u, v);
         if let Some((hit, _)) = vis.first_hit(x, st.beyond(x, d), [crate::limits::NONE; 2]) {
             let mut inside = false;
             for k in c.first_polygon..c.first_polygon + c.polygons {

@@ -161,24 +161,14 @@ pub(crate) fn light_along(
         if i == skip {
             return false;
         }
-        let (lo, hi, place, slot) = placed_box(st, ws, i);
-        if !crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
-            return false;
-        }
-        if let Some(g) = st.original_geometry(ws, slot) {
-            // Its own polygons: the light of the first one met, nothing through it.
-            return g
-                .first_hit(&place, from, to)
-                .is_some_and(|(q, entry)| met.push((entry, 0.0, i, q)).is_err());
-        }
-        let tau = st.placed(ws, i).tau(d);
-        let crossing = crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau);
-        if let Some((entry, t)) = crossing
-            && met.push((entry, t, i, NONE)).is_err()
-        {
-            return true;
-        }
-        false
+        // Its own polygons: the light of the first one met, nothing through it; a medium:
+        // its light, and what it lets through.
+        let entry = match meets(st, ws, i, from, to, d) {
+            Some(Met::Polygon(t, q)) => (t, 0.0, i, q),
+            Some(Met::Medium(entry, t)) => (entry, t, i, NONE),
+            None => return false,
+        };
+        met.push(entry).is_err()
     });
     met.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
     let mut through = 1.0f32;
@@ -286,6 +276,30 @@ pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
     }
 }
 
+/// What a segment meets of a closed instance (see [`meets`]).
+enum Met {
+    /// One of its own polygons: the parameter along the segment and the polygon.
+    Polygon(f32, u32),
+    /// Its box, as a medium: the parameter where the segment enters and what its contents
+    /// let through along it.
+    Medium(f32, f32),
+}
+
+/// What the segment `from..to` (of unit direction `d`) meets of closed instance `i`: its
+/// first polygon where it has its own (its BVH tests its box first), else its box as a
+/// medium of its `tau`; `None` when neither.
+fn meets(st: &State, ws: &[u8], i: u32, from: Vec3, to: Vec3, d: Vec3) -> Option<Met> {
+    let (lo, hi, place, slot) = placed_box(st, ws, i);
+    if let Some(g) = st.original_geometry(ws, slot) {
+        return g
+            .first_hit(&place, from, to)
+            .map(|(q, t)| Met::Polygon(t, q));
+    }
+    let tau = st.placed(ws, i).tau(d);
+    crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau)
+        .map(|(entry, t)| Met::Medium(entry, t))
+}
+
 /// Closed instance `i`'s original's box, its transform to world and its table slot.
 fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity, u32) {
     let leaf = st.instance(ws, i);
@@ -358,25 +372,18 @@ pub(crate) fn first_instance(
         return None;
     }
     let mut best: Option<(u32, f32, u32)> = None;
+    let d = (to - from).normalize_or_zero();
     bvh(st, ws).any_hit(from, to, |i| {
         if i == skip {
             return false;
         }
-        let (lo, hi, place, slot) = placed_box(st, ws, i);
-        if !crate::tables::closed::box_crossed(lo, hi, &place, from, to) {
-            return false;
-        }
-        let hit = match st.original_geometry(ws, slot) {
-            Some(g) => g.first_hit(&place, from, to).map(|(q, t)| (t, q)),
-            None => {
-                let tau = st.placed(ws, i).tau((to - from).normalize_or_zero());
-                crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau).and_then(
-                    |(entry, t)| {
-                        let (u, _) = crate::sampling::unit2(crate::sampling::hash3(h, i, 0xF1));
-                        (u >= t).then_some((entry, NONE))
-                    },
-                )
+        let hit = match meets(st, ws, i, from, to, d) {
+            Some(Met::Polygon(t, q)) => Some((t, q)),
+            Some(Met::Medium(entry, t)) => {
+                let (u, _) = crate::sampling::unit2(crate::sampling::hash3(h, i, 0xF1));
+                (u >= t).then_some((entry, NONE))
             }
+            None => None,
         };
         if let Some((t, q)) = hit
             && best.is_none_or(|(_, b, _)| t < b)

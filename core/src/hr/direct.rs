@@ -22,6 +22,7 @@ use super::exec::{Executor, Fallback, Progress, run_chunks_scaled};
 use super::ids::{Elem, Kind};
 use super::layout::{CHUNK, FINE_CHUNK};
 use super::records::*;
+use super::sample::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
 use super::state::State;
 use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::NONE;
@@ -457,27 +458,6 @@ pub(crate) fn no_steady_state(st: &State, ws: &[u8]) -> Option<usize> {
     (0..st.bands).find(|&b| emits[b] && !lossy[b])
 }
 
-/// A cosine-distributed unit direction about `n` from `u, v` in [0, 1).
-pub(crate) fn cosine_direction(n: Vec3, u: f32, v: f32) -> Vec3 {
-    let (t, b) = n.any_orthonormal_pair();
-    let r = libm::sqrtf(u);
-    let phi = 2.0 * core::f32::consts::PI * v;
-    let z = libm::sqrtf((1.0 - u).max(0.0));
-    (t * (r * libm::cosf(phi)) + b * (r * libm::sinf(phi)) + n * z).normalize_or_zero()
-}
-
-/// Area weight of the sample at `(u, v)`: the Jacobian of the bilinear map on a quad (1 on a
-/// triangle, whose map preserves area).
-pub(crate) fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
-    if corners.len() != 4 {
-        return 1.0;
-    }
-    let (a, b, c, d) = (corners[0], corners[1], corners[2], corners[3]);
-    let du = (b - a) * (1.0 - v) + (c - d) * v;
-    let dv = (d - a) * (1.0 - u) + (c - b) * u;
-    du.cross(dv).length()
-}
-
 /// The lit fraction of a patch towards a directional source: a `cells x cells` grid, 2 x 2
 /// jittered samples per cell, every sample weighted by its share of the area.
 ///
@@ -681,33 +661,4 @@ fn sky_light<V: Visibility + ?Sized>(
             }
         }
     }
-}
-
-/// A stride in `count / 2 .. count` coprime with `count` (1 for small counts), chosen from
-/// `h`: walking `j * stride mod count` visits every index once.
-pub(crate) fn coprime_stride(count: u32, h: u32) -> u32 {
-    if count <= 2 {
-        return 1;
-    }
-    let gcd = |mut a: u32, mut b: u32| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    let mut s = count / 2 + h % (count / 2).max(1);
-    while gcd(s, count) != 1 {
-        s += 1;
-        if s >= count {
-            s = 1;
-        }
-    }
-    s
-}
-
-/// The mean of [`jacobian`] over the unit square (exact for a bilinear quad: its value at the
-/// centre).
-pub(crate) fn mean_jacobian(corners: &[Vec3]) -> f32 {
-    let j = jacobian(corners, 0.5, 0.5);
-    if j > 0.0 { j } else { 1.0 }
 }

@@ -377,8 +377,8 @@ fn gather_link<V: Visibility + ?Sized>(
                     };
                     let a = st.patch(ws, Elem(st.polygon(ws, poly).root)).area;
                     // Each stratum's share of the area (a quad's map is not area-preserving).
-                    let jac = super::direct::jacobian(&corners[..n], u, v)
-                        / super::direct::mean_jacobian(&corners[..n]);
+                    let jac = super::sample::jacobian(&corners[..n], u, v)
+                        / super::sample::mean_jacobian(&corners[..n]);
                     (
                         point_on(&corners[..n], u, v),
                         poly,

@@ -108,7 +108,7 @@ fn trace<V: Visibility + ?Sized>(
     let Some(sp) = g.sample(a.min(1.0 - f32::EPSILON), u, v) else {
         return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     };
-    let d = super::direct::cosine_direction(sp.normal, du, dv);
+    let d = super::sample::cosine_direction(sp.normal, du, dv);
     if d == Vec3::ZERO {
         return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
     }

@@ -16,9 +16,9 @@
 //! Samples come from hashes of the polygon and the sample number: results never depend on
 //! the thread count.
 
-use super::direct::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
 use super::gather_rays::{adaptive_rays, gathered_share, polygon_rays};
 use super::ids::Elem;
+use super::sample::{coprime_stride, cosine_direction, jacobian, mean_jacobian};
 use super::state::State;
 use super::vis::Ray;
 use crate::formfactor::{facing_side, point_polygon};

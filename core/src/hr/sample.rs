@@ -1,5 +1,6 @@
 //! Points on elements for visibility rays and cluster transfers, chosen deterministically
-//! from a hash of the two elements and the ray number.
+//! from a hash of the two elements and the ray number; cosine-distributed directions, the
+//! area weights of points on a quad, and strides that shuffle stratified samples.
 
 use super::ids::{Elem, Kind};
 use super::state::State;
@@ -170,4 +171,54 @@ pub(crate) fn point_toward(
         }
     }
     (Vec3::ZERO, crate::limits::NONE, 0.0)
+}
+
+/// A cosine-distributed unit direction about `n` from `u, v` in [0, 1).
+pub(crate) fn cosine_direction(n: Vec3, u: f32, v: f32) -> Vec3 {
+    let (t, b) = n.any_orthonormal_pair();
+    let r = libm::sqrtf(u);
+    let phi = 2.0 * core::f32::consts::PI * v;
+    let z = libm::sqrtf((1.0 - u).max(0.0));
+    (t * (r * libm::cosf(phi)) + b * (r * libm::sinf(phi)) + n * z).normalize_or_zero()
+}
+
+/// Area weight of the sample at `(u, v)`: the Jacobian of the bilinear map on a quad (1 on a
+/// triangle, whose map preserves area).
+pub(crate) fn jacobian(corners: &[Vec3], u: f32, v: f32) -> f32 {
+    if corners.len() != 4 {
+        return 1.0;
+    }
+    let (a, b, c, d) = (corners[0], corners[1], corners[2], corners[3]);
+    let du = (b - a) * (1.0 - v) + (c - d) * v;
+    let dv = (d - a) * (1.0 - u) + (c - b) * u;
+    du.cross(dv).length()
+}
+
+/// A stride in `count / 2 .. count` coprime with `count` (1 for small counts), chosen from
+/// `h`: walking `j * stride mod count` visits every index once.
+pub(crate) fn coprime_stride(count: u32, h: u32) -> u32 {
+    if count <= 2 {
+        return 1;
+    }
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut s = count / 2 + h % (count / 2).max(1);
+    while gcd(s, count) != 1 {
+        s += 1;
+        if s >= count {
+            s = 1;
+        }
+    }
+    s
+}
+
+/// The mean of [`jacobian`] over the unit square (exact for a bilinear quad: its value at the
+/// centre).
+pub(crate) fn mean_jacobian(corners: &[Vec3]) -> f32 {
+    let j = jacobian(corners, 0.5, 0.5);
+    if j > 0.0 { j } else { 1.0 }
 }

@@ -58,7 +58,7 @@ pub struct Settings {
     /// rays with the original's own polygons, placed (a two-level BVH, as ray tracers
     /// instance), so that their shadows are the contents' own; larger ones block as a
     /// medium, by the transmittance `tau` of the ray's direction. 0: every closed instance
-    /// blocks by `tau`. Costs about 90 bytes per polygon of each such original, once per
+    /// blocks by `tau`. Costs about 120 bytes per polygon of each such original, once per
     /// level.
     pub blocking_polygons: u32,
 }

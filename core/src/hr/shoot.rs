@@ -10,9 +10,9 @@
 //! of the emitter's view.
 
 use super::cluster_kernel::{Witnesses, shared_area};
-use super::direct::cosine_direction;
 use super::eval::Coefficients;
 use super::ids::{Elem, Kind};
+use super::sample::cosine_direction;
 use super::sample::{area, point_in};
 use super::state::State;
 use crate::limits::NONE;

@@ -248,39 +248,32 @@ impl State {
         floats_mut(ws, at, nb)
     }
 
+    /// Byte offset of a patch's per-side value set `set` (1: gathered irradiance, 2: direct,
+    /// 3: direct through links; 0 is the radiosity, see [`State::b`]) on side `side`.
+    fn side_values_at(&self, ws: &[u8], e: Elem, set: usize, side: usize) -> usize {
+        let sides = Self::sides(e);
+        self.values_at(ws, e) + 4 * self.bands * (set * sides + side.min(sides - 1))
+    }
+
     /// Gathered irradiance of a patch's side `side` (W/m^2 per band): what its own links and
     /// its ancestor patches' links bring (before the closure factor). Clusters and sources
     /// keep none.
     pub(crate) fn h<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> &'a [f32] {
-        let nb = self.bands;
-        let sides = Self::sides(e);
-        floats(
-            ws,
-            self.values_at(ws, e) + 4 * nb * (sides + side.min(sides - 1)),
-            nb,
-        )
+        floats(ws, self.side_values_at(ws, e, 1, side), self.bands)
     }
 
     pub(crate) fn h_mut<'a>(&self, ws: &'a mut [u8], e: Elem, side: usize) -> &'a mut [f32] {
-        let nb = self.bands;
-        let sides = Self::sides(e);
-        let at = self.values_at(ws, e) + 4 * nb * (sides + side.min(sides - 1));
-        floats_mut(ws, at, nb)
+        let at = self.side_values_at(ws, e, 1, side);
+        floats_mut(ws, at, self.bands)
     }
 
     /// Direct irradiance of a patch's side from suns and sky (W/m^2 per band), or `None`
     /// when the scene has no directional sources.
     pub(crate) fn direct<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
-        if !self.lay.strides.direct {
-            return None;
-        }
-        let nb = self.bands;
-        let sides = Self::sides(e);
-        Some(floats(
-            ws,
-            self.values_at(ws, e) + 4 * nb * (2 * sides + side.min(sides - 1)),
-            nb,
-        ))
+        self.lay
+            .strides
+            .direct
+            .then(|| floats(ws, self.side_values_at(ws, e, 2, side), self.bands))
     }
 
     pub(crate) fn direct_mut<'a>(
@@ -289,28 +282,20 @@ impl State {
         e: Elem,
         side: usize,
     ) -> Option<&'a mut [f32]> {
-        if !self.lay.strides.direct {
-            return None;
-        }
-        let nb = self.bands;
-        let sides = Self::sides(e);
-        let at = self.values_at(ws, e) + 4 * nb * (2 * sides + side.min(sides - 1));
-        Some(floats_mut(ws, at, nb))
+        let at = self.side_values_at(ws, e, 2, side);
+        self.lay
+            .strides
+            .direct
+            .then(|| floats_mut(ws, at, self.bands))
     }
 
     /// The part of [`State::direct`] that came through links of the levels around (see
     /// `Strides::links_apart`), or `None` when it is not kept apart.
     pub(crate) fn linked<'a>(&self, ws: &'a [u8], e: Elem, side: usize) -> Option<&'a [f32]> {
-        if !self.lay.strides.links_apart {
-            return None;
-        }
-        let nb = self.bands;
-        let sides = Self::sides(e);
-        Some(floats(
-            ws,
-            self.values_at(ws, e) + 4 * nb * (3 * sides + side.min(sides - 1)),
-            nb,
-        ))
+        self.lay
+            .strides
+            .links_apart
+            .then(|| floats(ws, self.side_values_at(ws, e, 3, side), self.bands))
     }
 
     pub(crate) fn linked_mut<'a>(
@@ -319,13 +304,11 @@ impl State {
         e: Elem,
         side: usize,
     ) -> Option<&'a mut [f32]> {
-        if !self.lay.strides.links_apart {
-            return None;
-        }
-        let nb = self.bands;
-        let sides = Self::sides(e);
-        let at = self.values_at(ws, e) + 4 * nb * (3 * sides + side.min(sides - 1));
-        Some(floats_mut(ws, at, nb))
+        let at = self.side_values_at(ws, e, 3, side);
+        self.lay
+            .strides
+            .links_apart
+            .then(|| floats_mut(ws, at, self.bands))
     }
 
     /// Byte offset of polygon `i`'s record.

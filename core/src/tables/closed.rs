@@ -200,14 +200,7 @@ pub fn box_transmittance(
     to: Vec3,
     t: f32,
 ) -> f32 {
-    let Some((s0, s1)) = box_chord(lo, hi, place, from, to) else {
-        return 1.0;
-    };
-    let (a, b) = (s0.max(0.0), s1.min(1.0));
-    if a > b {
-        return 1.0;
-    }
-    share_of(t, s0, s1, a, b)
+    box_crossing(lo, hi, place, from, to, t).map_or(1.0, |(_, through)| through)
 }
 
 /// `t` to the power of the share `(b - a) / (s1 - s0)` of a chord (see

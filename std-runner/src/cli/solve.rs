@@ -108,7 +108,7 @@ pub struct Args {
     pub rays: u32,
     /// Closed instances (hi) whose original has at most this many polygons, once expanded,
     /// block rays with the original's own polygons (their shadows are the contents' own, at
-    /// about 90 bytes of workspace per polygon of each such original); larger ones block as
+    /// about 120 bytes of workspace per polygon of each such original); larger ones block as
     /// a medium, by their tables' transmittance. 0: all by transmittance.
     #[arg(long, default_value_t = Settings::BLOCKING_POLYGONS)]
     pub blocking_polygons: u32,
