@@ -13,7 +13,6 @@ use hirad::tables::bake_original;
 use hirad_core::hr::level_probe::solve_level;
 use hirad_core::hr::{Instancing, Settings};
 use hirad_core::image::{LightData, SceneView, SliceSource};
-use hirad_core::sink::{PolygonResult, Sink};
 use hirad_core::tables::closed::Received;
 
 /// Reflectance of the squares (both bands).
@@ -22,15 +21,6 @@ const RHO: f32 = 0.5;
 const SUN: f32 = 100.0;
 /// Side of the squares (m).
 const SIDE: f32 = 1.0;
-
-struct Nothing;
-
-impl Sink for Nothing {
-    type Error = std::convert::Infallible;
-    fn polygon(&mut self, _: &PolygonResult<'_>) -> Result<(), Self::Error> {
-        Ok(())
-    }
-}
 
 fn instance(transform: Similarity) -> Cluster {
     Cluster {
@@ -157,7 +147,7 @@ fn a_closed_instance_sends_its_neighbour_what_the_form_factor_says() {
         Instancing::Top,
         &mut ws,
         &mut exec,
-        &mut Nothing,
+        &mut common::Nothing,
         |l| {
             let mut by_node: Vec<u32> = (0..l.instances()).collect();
             by_node.sort_by_key(|&i| l.instance(i).node);

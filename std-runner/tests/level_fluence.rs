@@ -14,21 +14,11 @@ use hirad::tables::bake_original;
 use hirad_core::hr::level_probe::solve_level;
 use hirad_core::hr::{Instancing, Settings};
 use hirad_core::image::{LightData, SceneView, SliceSource};
-use hirad_core::sink::{PolygonResult, Sink};
 use hirad_core::tables::closed::Received;
 
 /// The soil's reflectance (both bands) and the sun's irradiance (W/m^2).
 const SOIL_RHO: f32 = 0.5;
 const SUN: f32 = 100.0;
-
-struct Nothing;
-
-impl Sink for Nothing {
-    type Error = std::convert::Infallible;
-    fn polygon(&mut self, _: &PolygonResult<'_>) -> Result<(), Self::Error> {
-        Ok(())
-    }
-}
 
 /// A square of side `s` at height `h`, facing down, over a soil of side `soil` lit by a
 /// low sun (its shadow falls away from under it): what the square intercepts, against the
@@ -114,7 +104,7 @@ fn a_closed_square_over_the_soil_takes_the_soil_light_its_face_sees() {
             Instancing::Top,
             &mut ws,
             &mut exec,
-            &mut Nothing,
+            &mut common::Nothing,
             |l| {
                 let c = l.instance(0);
                 let r = Received::over(&c.placed, c.received).unwrap();

@@ -206,8 +206,8 @@ pub(crate) fn light_along(
                 });
             for (band, o) in out.iter_mut().enumerate() {
                 let v = match &own {
-                    Some((r, side)) if noted(i, band, 1) > 0.0 => {
-                        r.first_radiosity(&placed, q as usize, *side, band) * noted(i, band, 1)
+                    Some((r, side)) => {
+                        r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band, 1)
                     }
                     _ => noted(i, band, 0),
                 };
@@ -263,7 +263,7 @@ pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
                     for (band, x) in v.iter_mut().enumerate().take(st.bands) {
                         let (all, once) = r.intensity_parts(&placed, o, band);
                         x[0] = core::f32::consts::PI * all.max(0.0) / shadow;
-                        x[1] = if once > 0.0 { all.max(0.0) / once } else { 0.0 };
+                        x[1] = core::f32::consts::PI * (all - once).max(0.0) / shadow;
                     }
                 }
             }

@@ -45,11 +45,9 @@ const NOBODY: u32 = (1 << 26) - 1;
 
 /// Bytes of one entry: the receiver and the cell of the light's direction of travel
 /// (`u32`: receiver << 6 | cell), where on the receiver (`u32`: its polygon << 1 | side,
-/// `NONE` for a receiver without polygons), then per band the share of the emitter's
-/// escaping light in that cell it takes.
-fn entry_bytes(bands: usize) -> usize {
-    8 + 4 * bands
-}
+/// `NONE` for a receiver without polygons), then the share of the emitter's escaping light
+/// in that cell it takes (`f32`).
+const ENTRY_BYTES: usize = 12;
 
 /// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
 /// entries, per instance and cell its escaping rays (their mean direction and how many,
@@ -58,7 +56,7 @@ fn parts(n: u32, bands: usize) -> [usize; 5] {
     let n = n as usize;
     let heads = 0;
     let entries = heads + up(4 * (n + 1));
-    let cells = entries + up(entry_bytes(bands) * n * RAYS as usize);
+    let cells = entries + up(ENTRY_BYTES * n * RAYS as usize);
     let power = cells + up(16 * n * CELLS);
     let end = power + up(4 * n * CELLS * bands);
     [heads, entries, cells, power, end]
@@ -87,17 +85,18 @@ fn grid() -> DirectionGrid {
 }
 
 /// Where the ray `j` of instance `i` goes: `INTERNAL`, or its receiver (`NOBODY`) << 6 |
-/// the cell of its direction; and the polygon and side it leaves from.
+/// the cell of its direction; its direction; and where on the receiver it lands (its
+/// polygon << 1 | the side met, `NONE` for a receiver without polygons).
 fn trace<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
     ray: &Ray<'_, V>,
     i: u32,
     j: u32,
-) -> (u32, u32, usize, Vec3, u32) {
+) -> (u32, Vec3, u32) {
     let leaf = st.instance(ws, i);
     let Some(g) = st.original_geometry(ws, leaf.slot) else {
-        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
+        return (INTERNAL, Vec3::ZERO, NONE);
     };
     let place = leaf.place();
     let h = hash3(i, j, 0xE8C4);
@@ -106,11 +105,11 @@ fn trace<V: Visibility + ?Sized>(
     let (u, v) = unit2(hash3(h, 2, 0xA2));
     let (du, dv) = unit2(hash3(h, 3, 0xA3));
     let Some(sp) = g.sample(a.min(1.0 - f32::EPSILON), u, v) else {
-        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
+        return (INTERNAL, Vec3::ZERO, NONE);
     };
     let d = super::sample::cosine_direction(sp.normal, du, dv);
     if d == Vec3::ZERO {
-        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
+        return (INTERNAL, Vec3::ZERO, NONE);
     }
     let x = place.point(sp.point);
     let w = place.direction(d).normalize_or_zero();
@@ -118,7 +117,7 @@ fn trace<V: Visibility + ?Sized>(
     // Its own polygons first (in its frame: the same parameter along the segment).
     let local_end = crate::tables::closed::local_point(&place, end);
     if g.first_hit_local(sp.point, local_end, sp.polygon).is_some() {
-        return (INTERNAL, NONE, 0, Vec3::ZERO, NONE);
+        return (INTERNAL, Vec3::ZERO, NONE);
     }
     let cell = grid().cell_of(w);
     let wall = ray.first_hit(x, end, [NONE, NONE]).map_or(1.0, |(_, t)| t);
@@ -137,74 +136,17 @@ fn trace<V: Visibility + ?Sized>(
         }
         _ => NONE,
     };
-    // The side it leaves: the front where the drawn normal is the polygon's own.
-    let side = usize::from(sp.normal.dot(g.normal(sp.polygon)) < 0.0);
-    ((who << 6) | cell, sp.polygon, side, w, at)
-}
-
-/// How bright each of instance `i`'s polygon sides is to the light it sends out, per band:
-/// its first scattering of the direct light plus the mean of all sides' (the light scattered
-/// more than once, spread evenly); 1 everywhere when the tables keep no polygon apart or
-/// nothing is lit. The escaping rays of a cell are weighed by it, so that a neighbour
-/// beside an instance's shaded lower leaves gets less of its light than one beside its
-/// sunlit top.
-fn brightness(st: &State, ws: &[u8], i: u32, q: u32, side: usize, mean: &[f32], out: &mut [f32]) {
-    out.fill(1.0);
-    if q == NONE || mean.iter().all(|&m| m <= 0.0) {
-        return;
-    }
-    let placed = st.placed(ws, i);
-    let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i)) else {
-        return;
-    };
-    for (b, o) in out.iter_mut().enumerate() {
-        *o = r.first_radiosity(&placed, q as usize, side, b) + mean[b];
-    }
-}
-
-/// The area-weighted mean first-scattered radiosity of instance `i`'s polygon sides per
-/// band (W/m^2), or zeros when its tables keep no polygon apart, in the geometry's order.
-fn mean_brightness(st: &State, ws: &[u8], i: u32, out: &mut [f32]) {
-    out.fill(0.0);
-    let leaf = st.instance(ws, i);
-    if st.slot(ws, leaf.slot).polygons_kept == 0 {
-        return;
-    }
-    let placed = st.placed(ws, i);
-    let (Some(single), Ok(r)) = (
-        placed.tables().single(),
-        crate::tables::closed::Received::over(&placed, st.received(ws, i)),
-    ) else {
-        return;
-    };
-    let mut area = 0.0f32;
-    for p in 0..single.polygons() {
-        let (_, a, _) = single.polygon(p, 0);
-        area += 2.0 * a;
-        for (b, o) in out.iter_mut().enumerate() {
-            for side in 0..2 {
-                *o += a * r.first_radiosity(&placed, p, side, b);
-            }
-        }
-    }
-    if area > 0.0 {
-        for o in out.iter_mut() {
-            *o /= area;
-        }
-    }
+    ((who << 6) | cell, w, at)
 }
 
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a State,
     ws: &'a mut [u8],
     vis: &'a Vis<'v, V>,
-    /// The instance whose rays are being gathered: its escaping rays' weights per cell and
-    /// band, their directions summed and count per cell, and its hits so far (key, and the
-    /// ray's index in `weights`).
-    escaped: [[f32; MAX_BANDS]; CELLS],
+    /// The instance whose rays are being gathered: its escaping rays' directions summed
+    /// and count per cell, and its hits so far (receiver and cell, where they land).
     towards: [[f32; 4]; CELLS],
-    hits: heapless::Vec<(u64, u32), { RAYS as usize }>,
-    weights: [[f32; MAX_BANDS]; RAYS as usize],
+    hits: heapless::Vec<u64, { RAYS as usize }>,
     written: u32,
 }
 
@@ -223,17 +165,14 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
     }
     let parts_per = RAYS / PER_CHUNK;
     let chunks = n as usize * parts_per as usize;
-    let nb = st.bands;
-    let per = 5 + nb;
+    let per = 5;
     let mut rays = 0u64;
     let mut ctx = Ctx {
         st,
         ws,
         vis,
-        escaped: [[0.0; MAX_BANDS]; CELLS],
         towards: [[0.0; 4]; CELLS],
         hits: heapless::Vec::new(),
-        weights: [[0.0; MAX_BANDS]; RAYS as usize],
         written: 0,
     };
     run_chunks(
@@ -249,21 +188,16 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
                 polys: WsPolygons { st: c.st, ws: c.ws },
             };
             let sends = sends(c.st, c.ws, i);
-            let mut mean = [0.0f32; MAX_BANDS];
-            if sends {
-                mean_brightness(c.st, c.ws, i, &mut mean[..nb]);
-            }
             for (k, o) in buf.chunks_exact_mut(per).enumerate() {
-                let (r, q, side, w, at) = if sends {
+                let (r, w, at) = if sends {
                     trace(c.st, c.ws, &ray, i, part * PER_CHUNK + k as u32)
                 } else {
-                    (INTERNAL, NONE, 0, Vec3::ZERO, NONE)
+                    (INTERNAL, Vec3::ZERO, NONE)
                 };
                 o[0] = f32::from_bits(r);
                 if r != INTERNAL {
                     o[1..4].copy_from_slice(&w.to_array());
                     o[4] = f32::from_bits(at);
-                    brightness(c.st, c.ws, i, q, side, &mean[..nb], &mut o[5..]);
                 }
             }
         },
@@ -271,30 +205,22 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
             let i = (chunk / parts_per as usize) as u32;
             let part = (chunk % parts_per as usize) as u32;
             if part == 0 {
-                c.escaped = [[0.0; MAX_BANDS]; CELLS];
                 c.towards = [[0.0; 4]; CELLS];
                 c.hits.clear();
             }
-            for (k, o) in buf.chunks_exact(per).enumerate() {
+            for o in buf.chunks_exact(per) {
                 let r = o[0].to_bits();
                 if r == INTERNAL {
                     continue;
                 }
                 rays += 1;
-                let j = (part * PER_CHUNK) as usize + k;
                 let cell = (r & 63) as usize;
-                for (e, w) in c.escaped[cell][..nb].iter_mut().zip(&o[5..]) {
-                    *e += w;
-                }
                 for (t, d) in c.towards[cell].iter_mut().zip(&o[1..4]) {
                     *t += d;
                 }
                 c.towards[cell][3] += 1.0;
-                c.weights[j][..nb].copy_from_slice(&o[5..5 + nb]);
                 if r >> 6 != NOBODY {
-                    let _ = c
-                        .hits
-                        .push(((r as u64) << 32 | o[4].to_bits() as u64, j as u32));
+                    let _ = c.hits.push((r as u64) << 32 | o[4].to_bits() as u64);
                 }
             }
             if part + 1 == parts_per {
@@ -313,10 +239,9 @@ pub(crate) fn build<V: Visibility + ?Sized, E: Executor>(
     st.stats.rays_by_phase.links += rays;
 }
 
-/// Writes instance `i`'s entries from its rays' keys and weights.
+/// Writes instance `i`'s entries from its rays' keys.
 fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
-    let nb = c.st.bands;
-    let p = parts(c.st.instances, nb);
+    let p = parts(c.st.instances, c.st.bands);
     let base = c.st.lay.exchange;
     super::pool::write(c.ws, base + p[0] + 4 * i as usize, &c.written);
     for (cell, t) in c.towards.iter().enumerate() {
@@ -327,25 +252,24 @@ fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
     c.hits.sort_unstable();
     let mut k = 0;
     while k < c.hits.len() {
-        let both = c.hits[k].0;
+        let both = c.hits[k];
         let (key, at_on) = ((both >> 32) as u32, both as u32);
         let cell = (key & 63) as usize;
-        let mut share = [0.0f32; MAX_BANDS];
         let mut m = k;
-        while m < c.hits.len() && c.hits[m].0 == both {
-            let j = c.hits[m].1 as usize;
-            for (x, w) in share[..nb].iter_mut().zip(&c.weights[j][..nb]) {
-                *x += w;
-            }
+        while m < c.hits.len() && c.hits[m] == both {
             m += 1;
         }
-        let at = base + p[1] + entry_bytes(nb) * c.written as usize;
+        // The share of the cell's escaping rays that land there.
+        let escaped = c.towards[cell][3];
+        let share = if escaped > 0.0 {
+            (m - k) as f32 / escaped
+        } else {
+            0.0
+        };
+        let at = base + p[1] + ENTRY_BYTES * c.written as usize;
         super::pool::write(c.ws, at, &key);
         super::pool::write(c.ws, at + 4, &at_on);
-        for (b, (&x, &e)) in share[..nb].iter().zip(&c.escaped[cell][..nb]).enumerate() {
-            let v = if e > 0.0 { x / e } else { 0.0 };
-            super::pool::write(c.ws, at + 8 + 4 * b, &v);
-        }
+        super::pool::write(c.ws, at + 8, &share);
         c.written += 1;
         k = m;
     }
@@ -390,7 +314,7 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             continue;
         };
         for e in first..last {
-            let at = base + p[1] + entry_bytes(nb) * e as usize;
+            let at = base + p[1] + ENTRY_BYTES * e as usize;
             let key: u32 = super::pool::read(ws, at);
             let on: u32 = super::pool::read(ws, at + 4);
             let cell = (key & 63) as usize;
@@ -398,9 +322,9 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             if to >= n {
                 continue;
             }
+            let share: f32 = super::pool::read(ws, at + 8);
             let mut power = [0.0f32; MAX_BANDS];
             for (band, x) in power.iter_mut().enumerate().take(nb) {
-                let share: f32 = super::pool::read(ws, at + 8 + 4 * band);
                 *x = sent[cell][band] * share;
             }
             let acc: &mut [f32] =

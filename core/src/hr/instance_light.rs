@@ -155,7 +155,12 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
                 };
                 for (slot, p) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(pairs)).enumerate() {
                     let (i, k) = ((p / sources) as u32, (p % sources) as u32);
-                    let (t, rays) = visible_fraction(c.st, c.ws, &ray, i, k);
+                    // Those lit polygon by polygon are lit below.
+                    let (t, rays) = if super::polygon_light::lit_by_polygon(c.st, c.ws, i) {
+                        (0.0, 0)
+                    } else {
+                        visible_fraction(c.st, c.ws, &ray, i, k)
+                    };
                     buf[2 * slot] = t;
                     buf[2 * slot + 1] = rays as f32;
                 }
@@ -187,6 +192,7 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
             },
         );
     }
+    super::polygon_light::light_polygons(st, ws, vis, ex, progress);
     start_from_direct(st, ws);
 }
 

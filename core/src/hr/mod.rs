@@ -46,6 +46,7 @@ mod original_geometry;
 mod output;
 mod pending;
 mod plan;
+mod polygon_light;
 mod pool;
 mod records;
 mod refine;

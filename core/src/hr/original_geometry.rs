@@ -303,21 +303,37 @@ impl<'a> OriginalGeometry<'a> {
             .areas
             .partition_point(|&s| s <= target)
             .min(self.areas.len() - 1);
-        let polys = self.vis.polygons();
-        let mut c = [Vec3::ZERO; 4];
-        let m = polys.corners(k as u32, &mut c);
-        if m < 3 {
-            return None;
-        }
-        let normal = (c[1] - c[0]).cross(c[m - 1] - c[0]).normalize_or_zero();
         let lo = if k == 0 { 0.0 } else { self.areas[k - 1] };
         let within = (target - lo) / (self.areas[k] - lo).max(f32::MIN_POSITIVE);
-        let two = polys.counts[k] & TWO_SIDED != 0;
+        let (point, normal) = self.point_on(k as u32, u, v)?;
+        let two = self.vis.polygons().counts[k] & TWO_SIDED != 0;
         let normal = if two && within >= 0.5 {
             -normal
         } else {
             normal
         };
+        Some(SurfacePoint {
+            point,
+            normal,
+            polygon: k as u32,
+        })
+    }
+
+    /// Polygons.
+    pub(crate) fn polygons(&self) -> u32 {
+        self.areas.len() as u32
+    }
+
+    /// A point of polygon `q` from `(u, v)` in [0, 1) (uniform on a parallelogram or a
+    /// triangle) and its unit front normal, in the original's frame; `None` for a degenerate
+    /// or missing polygon.
+    pub(crate) fn point_on(&self, q: u32, u: f32, v: f32) -> Option<(Vec3, Vec3)> {
+        let mut c = [Vec3::ZERO; 4];
+        let m = self.vis.polygons().corners(q, &mut c);
+        if m < 3 {
+            return None;
+        }
+        let normal = (c[1] - c[0]).cross(c[m - 1] - c[0]).normalize_or_zero();
         let point = if m == 3 {
             let (u, v) = if u + v > 1.0 {
                 (1.0 - u, 1.0 - v)
@@ -328,11 +344,7 @@ impl<'a> OriginalGeometry<'a> {
         } else {
             crate::sampling::point_on(&c[..4], u, v)
         };
-        Some(SurfacePoint {
-            point,
-            normal,
-            polygon: k as u32,
-        })
+        Some((point, normal))
     }
 
     /// Where the segment `from..to`, in the original's frame, first meets one of its

@@ -109,3 +109,13 @@ pub fn quick_tables() -> hirad::tables::TableSettings {
         ..hirad::tables::TableSettings::default()
     }
 }
+
+/// A sink that drops every polygon's results (level tests look at the level itself).
+pub struct Nothing;
+
+impl hirad_core::sink::Sink for Nothing {
+    type Error = std::convert::Infallible;
+    fn polygon(&mut self, _: &hirad_core::sink::PolygonResult<'_>) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
