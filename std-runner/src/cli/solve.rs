@@ -205,14 +205,23 @@ pub fn run(a: Args) -> Result<()> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     warn_unused(&a);
-    let loaded = files::load_scene(&a.scene)?;
+    let mut loaded = files::load_scene(&a.scene)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let up = a.up.unwrap_or(loaded.up);
-    let scene = &loaded.scene;
-    let bytes = files::compile(&a.scene, scene)?;
+    let bytes = files::compile(&a.scene, &loaded.scene)?;
     let info = *crate::scene::read_image(&bytes)
         .map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?
         .info();
+    // Hierarchical instantiation from a `.hirb` reads the file on demand: its tables go
+    // into the workspace once, and the model keeps none (a canopy's are 20 MB a copy).
+    let image = if a.method == Method::Hi && loaded.format == files::Format::Binary {
+        let view = files::open_image(&a.scene)?;
+        loaded.scene.tables = Vec::new();
+        Some(view)
+    } else {
+        None
+    };
+    let scene = &loaded.scene;
     drop(bytes);
     if info.expanded_polygons == 0 {
         if loaded.skipped_faces > 0 {
@@ -432,7 +441,24 @@ pub fn run(a: Args) -> Result<()> {
                 ..Settings::default()
             };
             let run = if a.method == Method::Hi {
-                solve::solve_hi(scene, &settings, threads, a.memory, &progress, &mut outputs)
+                match &image {
+                    Some(view) => solve::solve_hi_image(
+                        view,
+                        &settings,
+                        threads,
+                        a.memory,
+                        &progress,
+                        &mut outputs,
+                    ),
+                    None => solve::solve_hi(
+                        scene,
+                        &settings,
+                        threads,
+                        a.memory,
+                        &progress,
+                        &mut outputs,
+                    ),
+                }
             } else {
                 solve::solve_hr(
                     scene,

@@ -12,6 +12,7 @@ use crate::visibility::ObvhsVisibility;
 use anyhow::{Context, Result, anyhow};
 use glam::Vec3;
 use hirad_core::hr::{self, HrError, Plan, Settings, SolveError, Stats};
+use hirad_core::image::{SceneSource, SceneView};
 use hirad_core::sink::Sink;
 
 /// Which ray caster the hierarchical solver uses.
@@ -188,6 +189,32 @@ pub fn solve_hi<K: Sink<Error = anyhow::Error>>(
     )
 }
 
+/// [`solve_hi`] straight from a scene image (a `.hirb` file read on demand, see
+/// `files::FileSource`): the tables are read into the workspace once, and no other copy of
+/// them is held.
+pub fn solve_hi_image<S: SceneSource, K: Sink<Error = anyhow::Error>>(
+    view: &SceneView<S>,
+    settings: &Settings,
+    threads: usize,
+    memory: Option<u64>,
+    progress: &Progress,
+    sink: &mut K,
+) -> Result<HrRun> {
+    let setup = Instant::now();
+    run_view(
+        view,
+        None,
+        settings,
+        true,
+        threads,
+        memory,
+        VisibilityChoice::Core,
+        progress,
+        sink,
+        setup,
+    )
+}
+
 #[allow(clippy::too_many_arguments)]
 fn run_hr<K: Sink<Error = anyhow::Error>>(
     scene: &Scene,
@@ -202,9 +229,37 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
     let setup = Instant::now();
     let bytes = scene::compile(scene).map_err(|e| crate::exit::input(anyhow!("{e}")))?;
     let view = scene::read_image(&bytes).map_err(|e| crate::exit::input(anyhow!("{e}")))?;
+    run_view(
+        &view,
+        Some(scene),
+        settings,
+        hi,
+        threads,
+        memory,
+        visibility,
+        progress,
+        sink,
+        setup,
+    )
+}
+
+/// Solves the scene image `view` (`scene`, its model, for a caller's ray caster).
+#[allow(clippy::too_many_arguments)]
+fn run_view<S: SceneSource, K: Sink<Error = anyhow::Error>>(
+    view: &SceneView<S>,
+    scene: Option<&Scene>,
+    settings: &Settings,
+    hi: bool,
+    threads: usize,
+    memory: Option<u64>,
+    visibility: VisibilityChoice,
+    progress: &Progress,
+    sink: &mut K,
+    setup: Instant,
+) -> Result<HrRun> {
     let internal = visibility == VisibilityChoice::Core || hi;
-    let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
-    let plan = hr::plan(&view, settings, internal, &mut scratch).map_err(classify)?;
+    let mut scratch = vec![0u8; hr::census_scratch_bytes(view)];
+    let plan = hr::plan(view, settings, internal, &mut scratch).map_err(classify)?;
     // Hierarchical instantiation holds one path of levels and their originals' tables: what
     // it touches of a workspace (pages are taken lazily) is far less than the expanded
     // scene's plan; without a budget it gets that plan's size and room for every table
@@ -257,14 +312,14 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
     adapter.current = Some((0, setup));
     let result = match visibility {
         _ if hi => hr::solve_hi(
-            &view,
+            view,
             settings,
             &mut workspace,
             &mut exec,
             &mut adapter,
             sink,
         ),
-        VisibilityChoice::Obvhs => {
+        VisibilityChoice::Obvhs if let Some(scene) = scene => {
             let polygons = world_polygons(scene);
             let directions: Vec<Vec3> = scene.suns.iter().map(|l| l.towards).collect();
             let vis = ObvhsVisibility::new(&polygons)
@@ -272,7 +327,7 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
                 .with_directions(&polygons, &directions);
             drop(polygons);
             hr::solve(
-                &view,
+                view,
                 settings,
                 &mut workspace,
                 Some(&vis),
@@ -281,8 +336,8 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
                 sink,
             )
         }
-        VisibilityChoice::Core => hr::solve(
-            &view,
+        _ => hr::solve(
+            view,
             settings,
             &mut workspace,
             None::<&ObvhsVisibility>,
