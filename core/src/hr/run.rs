@@ -220,6 +220,25 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         }
     }
 
+    /// The relighting passes of the final gather (see `relight`): the patches' light
+    /// gathered by rays, the solution solved again from it.
+    pub(super) fn relight<P: Progress>(&mut self, progress: &mut P) {
+        Self::relight_with(&mut self.st, self.ws, &self.vis, &mut self.seq, progress);
+    }
+
+    fn relight_with(
+        st: &mut state::State,
+        ws: &mut [u8],
+        vis: &vis::Vis<'_, V>,
+        seq: &mut exec::Fallback<'_, E>,
+        progress: &mut dyn Progress,
+    ) {
+        if gather_rays::rays_per_side(st, ws) > 0 {
+            gather_rays::note_shares(st, ws);
+            relight::relight_passes(st, ws, vis, seq, progress);
+        }
+    }
+
     /// The final passes: statistics, the relighting passes of the final gather, the power
     /// balance, and every polygon to the sink.
     pub(super) fn finish<K: Sink, P: Progress>(
@@ -239,10 +258,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
         st.stats.emitted_power = st.power;
-        if gather_rays::rays_per_side(st, ws) > 0 {
-            gather_rays::note_shares(st, ws);
-            relight::relight_passes(st, ws, &self.vis, &mut self.seq, progress);
-        }
+        Self::relight_with(st, ws, &self.vis, &mut self.seq, progress);
         let rays = 4 * st.settings.rays;
         st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);
         super::blockers::note_radiance(st, ws);
