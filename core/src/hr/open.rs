@@ -157,13 +157,12 @@ where
     run.st.unit_power = ctx.unit_power;
     run.st.scene_sides = ctx.scene_sides;
     run.rounds(ctx.progress);
-    // The top level's patches relit by the final gather's rays, as hr's are: the light its
-    // closed instances send its polygons through links (an isotropic kernel from each
-    // instance's centre) left the soil under a canopy 18% short in NIR, and the opened
-    // plants' gather rays read that soil.
-    if depth == 0 {
-        run.relight(ctx.progress);
-    }
+    // Every level's patches relit by the final gather's rays, as hr's are: the light the
+    // closed instances send the level's polygons through links (an isotropic kernel from
+    // each instance's centre) left the soil under 48 plants 18% short in NIR, and the
+    // opened plants' gather rays read that soil; an opened level's own patches, lit by
+    // binned beams, are read by its polygons' rays the same way.
+    run.relight(ctx.progress);
     let Run {
         mut st,
         ws,
