@@ -188,9 +188,10 @@ pub(crate) fn light_along(
     for &(_, t, i, q) in &met {
         if t < 1.0 {
             let w = weight * through * (1.0 - t);
-            // The polygon met, where the tables keep it apart: its own first scattering,
-            // scaled by all the light over the first scattering that way (the instance's
-            // mean would give a leaf deep inside a neighbour its sunlit top's light).
+            // The polygon met, where the tables keep it apart: its own first scattering
+            // (the instance's mean would give a leaf deep inside a neighbour its sunlit
+            // top's light), plus the instance's light scattered more than once that way
+            // (which a shaded leaf shows too).
             let placed = st.placed(ws, i);
             let kept = st.slot(ws, st.instance(ws, i).slot).polygons_kept != 0;
             let own = (q != NONE && kept)
@@ -231,7 +232,7 @@ pub(crate) fn radiance_bytes(n: u32, bands: usize) -> usize {
     n as usize * RADIANCE_GRID.cells() as usize * bands * 2 * 4
 }
 
-/// Where part `part` (0: the mean radiosity, 1: all the light over the first scattering)
+/// Where part `part` (0: the mean radiosity, 1: that of the light scattered more than once)
 /// of closed instance `i`'s noted radiance in cell `cell` and band `band` lies.
 fn radiance_at(st: &State, i: u32, cell: u32, band: usize, part: usize) -> usize {
     let cells = RADIANCE_GRID.cells() as usize;
@@ -244,9 +245,9 @@ fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize, part: usize) 
 
 /// Notes, for every closed instance, the radiosity (`pi` times the radiance, W/m^2 per
 /// band) its contents show an observer in each cell's direction: its tables' intensity
-/// that way over its cross-section, from the light it holds now; and the ratio of that
-/// intensity to its first scattering's (0 without polygons kept apart), which scales the
-/// first scattering of the one polygon a ray meets. Gather rays read it (see
+/// that way over its cross-section, from the light it holds now; and the same of its light
+/// scattered more than once (its intensity less the first scattering's), which is added to
+/// the first scattering of the one polygon a ray meets. Gather rays read it (see
 /// [`light_along`]) once the level is solved: the tables' sum over all their cells for
 /// every ray was four fifths of a canopy's gather.
 pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {

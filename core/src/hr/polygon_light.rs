@@ -4,7 +4,8 @@
 //! leaves lit, polygon by polygon. Its first scattering is then where the light really
 //! falls: under a dense canopy a plant's lower leaves lie in its neighbours' shade, which one
 //! lit fraction for the whole plant spread evenly over its leaves (their isolated lighting),
-//! so the soil below read their light as if they were lit and took 20% too much.
+//! so the soil below read their light as if they were lit (240 plants: the darkest soil 21%
+//! too much NIR, 8% too much PAR).
 //!
 //! Per polygon, `rays` points for each sun and twice as many for the sky (its directions
 //! drawn by their irradiance times the cosine), each first tested against the instance's
@@ -181,16 +182,16 @@ fn fractions<V: Visibility + ?Sized>(
     let inverse = place.rotation.conjugate();
     let far = st.far / place.scale.max(f32::MIN_POSITIVE);
     let per = st.settings.rays.max(1);
-    let sky = st.sources - st.suns;
     let mut rays = 0u32;
-    // The sky's directions (world, local) and their largest band's irradiance.
-    let mut skies: heapless::Vec<(Vec3, Vec3, f32), MAX_SOURCES> = heapless::Vec::new();
-    for k in st.suns..st.sources {
-        if let Some((towards, e)) = source(st, ws, k) {
-            let w = e[..st.bands].iter().copied().fold(0.0f32, f32::max);
-            let _ = skies.push((towards, (inverse * towards).normalize_or_zero(), w));
-        }
+    // Every source's direction (world, local) and its largest band's irradiance, read once
+    // for the block (by source number: suns first, then the sky).
+    let mut dirs: heapless::Vec<(Vec3, Vec3, f32), MAX_SOURCES> = heapless::Vec::new();
+    for k in 0..st.sources {
+        let (towards, e) = source(st, ws, k).unwrap_or((Vec3::ZERO, [0.0; MAX_BANDS]));
+        let w = e[..st.bands].iter().copied().fold(0.0f32, f32::max);
+        let _ = dirs.push((towards, (inverse * towards).normalize_or_zero(), w));
     }
+    let (suns, skies) = dirs.split_at(st.suns as usize);
     // One point: open to the source through the instance's own polygons, and what the
     // level lets through from there (None when its own polygons shade it).
     let mut point = |q: u32, k: u32, towards: Vec3, local: Vec3, h: u32| -> Option<f32> {
@@ -210,11 +211,8 @@ fn fractions<V: Visibility + ?Sized>(
     for q in first..last {
         let slot = (q - first) as usize;
         let n = g.normal(q);
-        for k in 0..st.suns {
-            let Some((towards, _)) = source(st, ws, k) else {
-                continue;
-            };
-            let local = (inverse * towards).normalize_or_zero();
+        for (k, &(towards, local, _)) in suns.iter().enumerate() {
+            let k = k as u32;
             if n.dot(local) == 0.0 {
                 continue;
             }
@@ -229,7 +227,7 @@ fn fractions<V: Visibility + ?Sized>(
                 out[k as usize * b as usize + slot] = lit / open as f32;
             }
         }
-        if sky == 0 {
+        if skies.is_empty() {
             continue;
         }
         // The sky: directions drawn by irradiance times cosine, stratified.
