@@ -104,6 +104,70 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     assert!(json.contains("\"solved\": 26"), "{json}");
     assert!(json.contains("\"deepest\": 2"), "{json}");
     assert!(json.contains("\"closed_instances\": 25"), "{json}");
+    // Any thread count gives the same bytes (the levels and their chunks are handed out in
+    // a fixed order).
+    for threads in ["1", "2", "3"] {
+        let other = dir.path().join(format!("hi_{threads}.csv"));
+        let out = hirad(&[
+            "solve",
+            s(&image),
+            "--method",
+            "hi",
+            "--threads",
+            threads,
+            "--results",
+            s(&other),
+            "-q",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            std::fs::read(&other).unwrap() == std::fs::read(&hi).unwrap(),
+            "--threads {threads} changed the results"
+        );
+    }
+    // Every instance expanded is hr: the same bytes, and no tables needed.
+    for scene in [&image, &plant] {
+        let none = dir.path().join("none.csv");
+        let out = hirad(&[
+            "solve",
+            s(scene),
+            "--method",
+            "hi",
+            "--instancing",
+            "none",
+            "--results",
+            s(&none),
+            "-q",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            std::fs::read(&none).unwrap() == std::fs::read(&hr).unwrap(),
+            "--instancing none differs from --method hr on {}",
+            scene.display()
+        );
+    }
+    // Closing instances is hi's business: hr and exact refuse it.
+    for method in ["hr", "exact"] {
+        let out = hirad(&[
+            "solve",
+            s(&image),
+            "--method",
+            method,
+            "--instancing",
+            "all",
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{method}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--instancing"), "{err}");
+    }
     // The scene without tables: an input error that says how to make them.
     let out = hirad(&["solve", s(&plant), "--method", "hi", "-q"]);
     assert_eq!(out.status.code(), Some(3));

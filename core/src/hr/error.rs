@@ -58,7 +58,7 @@ impl core::fmt::Display for HrError {
             HrError::Image(e) => write!(f, "{e}"),
             HrError::NoTables { original } => write!(
                 f,
-                "original {original} has closed instances but no directional tables in the image (compute them with `hirad tables SCENE -o OUT.hirb`)"
+                "original {original} has closed instances but no directional tables in the image (compute them with `hirad tables SCENE -o OUT.hirb`, or expand every instance: `--instancing none`)"
             ),
             HrError::WorkspaceTooSmall { needed } => {
                 write!(

@@ -27,6 +27,17 @@ pub enum Method {
     Exact,
 }
 
+/// Which instances `--method hi` keeps closed (`--instancing`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum InstancingChoice {
+    /// Every instance closed through its original's tables at its parent's level, and
+    /// opened in turn (the paper's figure 2): memory holds one path of levels.
+    All,
+    /// Every instance expanded: hierarchical radiosity over the whole scene, the same
+    /// solver and results as `--method hr` (no tables needed).
+    None,
+}
+
 /// Arguments of `hirad solve`.
 #[derive(clap::Args, Debug)]
 #[command(
@@ -38,6 +49,11 @@ pub struct Args {
     /// Solver.
     #[arg(long, value_enum, default_value_t = Method::Hr)]
     pub method: Method,
+    /// Which instances `--method hi` keeps closed: `all` (each level's instances closed
+    /// through their tables, then opened one at a time) or `none` (every instance expanded:
+    /// `--method hr`, results identical). Default: `all` with `--method hi`.
+    #[arg(long, value_enum)]
+    pub instancing: Option<InstancingChoice>,
     /// Refinement threshold (hr): a link is refined while its transfer exceeds epsilon times
     /// the scene's emitted power. Dimensionless; smaller is finer and slower.
     #[arg(long, default_value_t = 1e-3)]
@@ -177,6 +193,28 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
 pub fn run(a: Args) -> Result<()> {
     let start = Instant::now();
     let refuse = |m: String| Err(usage(anyhow!(m)));
+    if a.instancing.is_some() && a.method != Method::Hi {
+        return refuse(format!(
+            "--instancing chooses which instances --method hi keeps closed; --method {} expands every instance",
+            if a.method == Method::Hr {
+                "hr"
+            } else {
+                "exact"
+            }
+        ));
+    }
+    // `hi` with every instance expanded is hierarchical radiosity over the whole scene: the
+    // same solver, and the same results, as `--method hr`.
+    let instancing =
+        (a.method == Method::Hi).then(|| a.instancing.unwrap_or(InstancingChoice::All));
+    let a = Args {
+        method: if instancing == Some(InstancingChoice::None) {
+            Method::Hr
+        } else {
+            a.method
+        },
+        ..a
+    };
     if !(a.epsilon.is_finite() && a.epsilon > 0.0) {
         return refuse(format!(
             "--epsilon must be a positive number, got {}",
@@ -374,10 +412,10 @@ pub fn run(a: Args) -> Result<()> {
     }
 
     let progress = Progress::new(a.quiet);
-    let method = match a.method {
-        Method::Hr => "hr",
-        Method::Hi => "hi",
-        Method::Exact => "exact",
+    let method = match (a.method, instancing) {
+        (Method::Hr, None) => "hr",
+        (Method::Hi | Method::Hr, Some(_)) => "hi",
+        (_, _) => "exact",
     };
     let hr = a.method != Method::Exact;
     // f32 settings as the decimal given, not its f32 widening (1e-3, not 0.0010000000474).
@@ -405,6 +443,7 @@ pub fn run(a: Args) -> Result<()> {
             memory_bytes: if hr { a.memory } else { None },
             visibility: hr.then(|| format!("{:?}", a.visibility).to_lowercase()),
             blocking_polygons: (a.method == Method::Hi).then_some(a.blocking_polygons),
+            instancing: instancing.map(|i| format!("{i:?}").to_lowercase()),
             elements: (!hr).then_some(a.elements),
             threads: a.threads.map(u32::from),
             image: image_settings,

@@ -73,6 +73,10 @@ pub struct RunSettings {
     /// polygons block with them, larger ones by `tau`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blocking_polygons: Option<u32>,
+    /// `--instancing` (hi): `all` (every level's instances closed, then opened in turn) or
+    /// `none` (every instance expanded: hr's solver and results).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instancing: Option<String>,
     /// `--elements` (exact): element budget.
     pub elements: Option<u64>,
     /// `--threads` asked; `null` for every core.
