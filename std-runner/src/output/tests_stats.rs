@@ -23,6 +23,7 @@ fn report() -> SolveReport {
             memory_bytes: None,
             visibility: Some("obvhs".into()),
             blocking_polygons: None,
+            instancing: None,
             elements: None,
             threads: Some(4),
             image: Some(ImageSettings {
