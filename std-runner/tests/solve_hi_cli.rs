@@ -104,6 +104,38 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     assert!(json.contains("\"solved\": 26"), "{json}");
     assert!(json.contains("\"deepest\": 2"), "{json}");
     assert!(json.contains("\"closed_instances\": 25"), "{json}");
+    // Every level in one bin of the histogram by leaf elements; the stack's peak grows with
+    // depth (a child opens above its parent's part of the workspace).
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let levels = &v["levels"];
+    let bins = levels["leaf_histogram"].as_array().unwrap();
+    let binned: u64 = bins.iter().map(|b| b["levels"].as_u64().unwrap()).sum();
+    assert_eq!(binned, 26, "{levels}");
+    for b in bins {
+        let (from, to) = (
+            b["leaves_from"].as_u64().unwrap(),
+            b["leaves_to"].as_u64().unwrap(),
+        );
+        assert!(from <= to && (to + 1).is_power_of_two(), "{levels}");
+    }
+    let largest = levels["largest_level_leaves"].as_u64().unwrap();
+    assert!(
+        bins.last().unwrap()["leaves_to"].as_u64().unwrap() >= largest,
+        "{levels}"
+    );
+    let peaks: Vec<u64> = levels["peak_workspace_bytes_by_depth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_u64().unwrap())
+        .collect();
+    assert_eq!(peaks.len(), 3, "{levels}");
+    assert!(peaks.windows(2).all(|w| w[0] < w[1]), "{levels}");
+    assert_eq!(
+        *peaks.iter().max().unwrap(),
+        v["peak_workspace_bytes"].as_u64().unwrap(),
+        "{levels}"
+    );
     // Any thread count gives the same bytes (the levels and their chunks are handed out in
     // a fixed order).
     for threads in ["1", "2", "3"] {

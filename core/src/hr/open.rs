@@ -201,7 +201,12 @@ where
     add_level(ctx.stats, &st.stats, origin, depth == 0);
     ctx.stats.level_depth = ctx.stats.level_depth.max(depth as u32);
     ctx.stats.closed_instances += st.instances as u64;
-    ctx.stats.largest_level = ctx.stats.largest_level.max(st.stats.patches);
+    let leaves = leaf_elements(&st, ws);
+    ctx.stats.largest_level = ctx.stats.largest_level.max(leaves);
+    ctx.stats.leaf_histogram[Stats::leaf_bin(leaves)] += 1;
+    let d = depth.min(ctx.stats.peak_bytes_by_depth.len() - 1);
+    let peak = origin as u64 + st.stats.peak_bytes;
+    ctx.stats.peak_bytes_by_depth[d] = ctx.stats.peak_bytes_by_depth[d].max(peak);
     // The parent's part of the workspace stays as it is; children open above it.
     let used = st.lay.blocks_base + st.blocks.used as usize * st.blocks.size;
     let (mine, free) = ws.split_at_mut(used.min(ws.len()));
@@ -460,6 +465,19 @@ fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<
 }
 
 /// Adds a level's counts to the solve's; the top level's stats stand for the solve.
+/// The leaf elements of a solved level: its leaf patches and its closed instances.
+fn leaf_elements(st: &State, ws: &[u8]) -> u64 {
+    let mut n = st.instances as u64;
+    for kind in [Kind::Patch1, Kind::Patch2] {
+        for i in 0..st.pool(kind).len {
+            if st.patch(ws, Elem::new(kind, i)).first_child == NONE {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
 fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
     if top {
         let keep = (
@@ -467,6 +485,8 @@ fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
             total.level_depth,
             total.closed_instances,
             total.largest_level,
+            total.leaf_histogram,
+            total.peak_bytes_by_depth,
         );
         *total = *level;
         (
@@ -474,6 +494,8 @@ fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
             total.level_depth,
             total.closed_instances,
             total.largest_level,
+            total.leaf_histogram,
+            total.peak_bytes_by_depth,
         ) = keep;
     } else {
         total.polygons += level.polygons;

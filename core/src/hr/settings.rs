@@ -193,8 +193,23 @@ pub struct Stats {
     pub level_depth: u32,
     /// Closed instances over all levels.
     pub closed_instances: u64,
-    /// The most leaf elements (patches) of one level.
+    /// The most leaf elements (leaf patches and closed instances) of one level.
     pub largest_level: u64,
+    /// Levels by their leaf elements (leaf patches and closed instances: what one local
+    /// solve holds, the paper's figure 4, right): entry `k` counts the levels with
+    /// `2^k <= leaves < 2^(k+1)` (entry 0 also those with none).
+    pub leaf_histogram: [u64; 32],
+    /// Per level depth (the top level is 0; depths past the last entry count there), the
+    /// most workspace bytes in use while a level of that depth was solved: its own and its
+    /// ancestors' below it on the stack.
+    pub peak_bytes_by_depth: [u64; 32],
+}
+
+impl Stats {
+    /// The entry of [`Stats::leaf_histogram`] that counts a level of `leaves` leaf elements.
+    pub fn leaf_bin(leaves: u64) -> usize {
+        (63 - leaves.max(1).leading_zeros()) as usize
+    }
 }
 
 /// Visibility rays per phase of a solve (what the ray count of [`Stats`] is spent on).

@@ -519,12 +519,7 @@ pub fn run(a: Args) -> Result<()> {
                 final_gather: s.rays_by_phase.final_gather,
             });
             report.final_passes = Some(s.final_passes);
-            report.levels = (a.method == Method::Hi).then_some(crate::output::Levels {
-                solved: s.levels,
-                deepest: s.level_depth,
-                closed_instances: s.closed_instances,
-                largest_level_patches: s.largest_level,
-            });
+            report.levels = (a.method == Method::Hi).then(|| crate::output::Levels::of(&s));
             report.final_change_percent =
                 Some(100.0 * s.final_change as f64).filter(|_| s.final_passes > 1);
             report.phases = run

@@ -47,8 +47,8 @@ pub use results::{ResultsFile, ResultsTable, ResultsWriter, TableLayout};
 pub use results_read::{TableError, read_results, read_results_file};
 pub use row_labels::RowLabels;
 pub use stats::{
-    BandPower, ImageSettings, Levels, OutputFile, PhaseTime, RaysByPhase, RunSettings, SolveReport,
-    Verdict,
+    BandPower, ImageSettings, LeafBin, Levels, OutputFile, PhaseTime, RaysByPhase, RunSettings,
+    SolveReport, Verdict,
 };
 
 #[cfg(test)]

@@ -132,8 +132,52 @@ pub struct Levels {
     pub deepest: u32,
     /// Closed instances over all levels.
     pub closed_instances: u64,
-    /// The most leaf elements (patches) one level held.
-    pub largest_level_patches: u64,
+    /// The most leaf elements (leaf patches and closed instances) one level held.
+    #[serde(alias = "largest_level_patches")]
+    pub largest_level_leaves: u64,
+    /// Levels by their leaf elements (what one local solve holds; the paper's figure 4,
+    /// right), in bins doubling in size, empty bins left out.
+    #[serde(default)]
+    pub leaf_histogram: Vec<LeafBin>,
+    /// Per level depth (the top level first), the most workspace in use while a level of
+    /// that depth was solved, its ancestors' part below it on the stack included (bytes).
+    #[serde(default)]
+    pub peak_workspace_bytes_by_depth: Vec<u64>,
+}
+
+/// One bin of [`Levels::leaf_histogram`]: the levels that held from `leaves_from` to
+/// `leaves_to` leaf elements (both included).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LeafBin {
+    pub leaves_from: u64,
+    pub leaves_to: u64,
+    pub levels: u64,
+}
+
+impl Levels {
+    /// The levels of a solve's statistics.
+    pub fn of(s: &hirad_core::hr::Stats) -> Levels {
+        let leaf_histogram = s
+            .leaf_histogram
+            .iter()
+            .enumerate()
+            .filter(|&(_, &n)| n > 0)
+            .map(|(k, &levels)| LeafBin {
+                leaves_from: if k == 0 { 0 } else { 1 << k },
+                leaves_to: (1u64 << (k + 1)) - 1,
+                levels,
+            })
+            .collect();
+        let depths = (s.level_depth as usize + 1).min(s.peak_bytes_by_depth.len());
+        Levels {
+            solved: s.levels,
+            deepest: s.level_depth,
+            closed_instances: s.closed_instances,
+            largest_level_leaves: s.largest_level,
+            leaf_histogram,
+            peak_workspace_bytes_by_depth: s.peak_bytes_by_depth[..depths].to_vec(),
+        }
+    }
 }
 
 /// Settings, counts, time, memory and error of one solve.
@@ -340,6 +384,27 @@ impl SolveReport {
             "  {} polygons, {} elements, {} links, {} iterations, {} refinement passes",
             self.polygons, self.elements, self.links, self.iterations, self.refinement_passes
         )?;
+        if let Some(l) = &self.levels {
+            let bins: Vec<String> = l
+                .leaf_histogram
+                .iter()
+                .map(|b| format!("{}-{}: {}", b.leaves_from, b.leaves_to, b.levels))
+                .collect();
+            let peaks: Vec<String> = l
+                .peak_workspace_bytes_by_depth
+                .iter()
+                .map(|&b| bytes(b))
+                .collect();
+            writeln!(
+                out,
+                "  levels: {} solved (deepest {}), {} closed instances; levels by leaf elements {}; peak workspace by depth {}",
+                l.solved,
+                l.deepest,
+                l.closed_instances,
+                bins.join(", "),
+                peaks.join(", ")
+            )?;
+        }
         if self.budget_limited {
             writeln!(
                 out,
