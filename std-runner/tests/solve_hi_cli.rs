@@ -131,6 +131,20 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
         .collect();
     assert_eq!(peaks.len(), 3, "{levels}");
     assert!(peaks.windows(2).all(|w| w[0] < w[1]), "{levels}");
+    // The top level's regions add up to no more than its peak; the exchange writes part of
+    // its region; the plant's five closed branches receive light and hold their table.
+    let top = levels["top_level_bytes"].as_object().unwrap();
+    let part = |k: &str| top[k].as_u64().unwrap();
+    let laid_out: u64 = top
+        .iter()
+        .filter(|(k, _)| *k != "exchange_written")
+        .map(|(_, v)| v.as_u64().unwrap())
+        .sum();
+    assert!(laid_out <= peaks[0], "{levels}");
+    assert!(part("exchange_written") <= part("exchange_laid_out"), "{levels}");
+    for k in ["received_light", "tables", "patches_and_links", "noted_radiance"] {
+        assert!(part(k) > 0, "{k}: {levels}");
+    }
     assert_eq!(
         *peaks.iter().max().unwrap(),
         v["peak_workspace_bytes"].as_u64().unwrap(),

@@ -67,6 +67,18 @@ pub(crate) fn bytes_needed(n: u32, bands: usize) -> usize {
     if n == 0 { 0 } else { parts(n, bands)[4] }
 }
 
+/// Bytes of the region written: everything but the entries never reached (0 without
+/// closed instances).
+pub(crate) fn bytes_written(st: &State, ws: &[u8]) -> usize {
+    let n = st.instances;
+    if n == 0 {
+        return 0;
+    }
+    let p = parts(n, st.bands);
+    let written: u32 = super::pool::read(ws, st.lay.exchange + p[0] + 4 * n as usize);
+    p[4] - (p[2] - p[1]) + ENTRY_BYTES * written as usize
+}
+
 /// True when closed instance `i` sends its light to the others through the exchange (it
 /// blocks with its own polygons), not through links.
 pub(crate) fn sends(st: &State, ws: &[u8], i: u32) -> bool {

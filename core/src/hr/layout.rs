@@ -188,6 +188,29 @@ impl Layout {
         self.table_bytes_end - self.table_visible
     }
 
+    /// The workspace by what it holds, `blocks_used` blocks handed out and
+    /// `exchange_written` bytes of the exchange's region written.
+    pub(crate) fn regions(
+        &self,
+        blocks_used: u32,
+        exchange_written: usize,
+    ) -> super::settings::WorkspaceRegions {
+        let b = |from: usize, to: usize| to.saturating_sub(from) as u64;
+        super::settings::WorkspaceRegions {
+            scene: b(self.materials, self.instances) + b(self.sources, self.fixed_bytes),
+            instances: b(self.instances, self.received) + b(self.closed_bvh, self.exchange),
+            received: b(self.received, self.slots),
+            tables: b(self.slots, self.table_bytes_end),
+            blocking: b(self.blocking, self.blocking_end),
+            exchange: b(self.exchange, self.radiance),
+            exchange_written: exchange_written as u64,
+            radiance: b(self.radiance, self.sources),
+            blocks: b(self.fixed_bytes, self.blocks_base)
+                + blocks_used as u64 * self.block_size as u64,
+            bvh_scratch: (self.bvh_bytes + 4 * self.scratch_floats) as u64,
+        }
+    }
+
     /// Floats of received light the layout holds.
     pub(crate) fn n_received_floats(&self) -> usize {
         (self.slots - self.received) / 4

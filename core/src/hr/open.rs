@@ -201,6 +201,10 @@ where
     add_level(ctx.stats, &st.stats, origin, depth == 0);
     ctx.stats.level_depth = ctx.stats.level_depth.max(depth as u32);
     ctx.stats.closed_instances += st.instances as u64;
+    if depth == 0 {
+        let written = super::exchange::bytes_written(&st, ws);
+        ctx.stats.top_regions = st.lay.regions(st.blocks.used, written);
+    }
     let leaves = leaf_elements(&st, ws);
     ctx.stats.largest_level = ctx.stats.largest_level.max(leaves);
     ctx.stats.leaf_histogram[Stats::leaf_bin(leaves)] += 1;
@@ -487,6 +491,7 @@ fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
             total.largest_level,
             total.leaf_histogram,
             total.peak_bytes_by_depth,
+            total.top_regions,
         );
         *total = *level;
         (
@@ -496,6 +501,7 @@ fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
             total.largest_level,
             total.leaf_histogram,
             total.peak_bytes_by_depth,
+            total.top_regions,
         ) = keep;
     } else {
         total.polygons += level.polygons;

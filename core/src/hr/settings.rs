@@ -203,6 +203,34 @@ pub struct Stats {
     /// most workspace bytes in use while a level of that depth was solved: its own and its
     /// ancestors' below it on the stack.
     pub peak_bytes_by_depth: [u64; 32],
+    /// Where the top level's workspace goes (hierarchical instantiation; zero otherwise).
+    pub top_regions: WorkspaceRegions,
+}
+
+/// A level's workspace by what it holds (bytes), as laid out; the exchange's entries as
+/// written (the rest of their region is never touched, so never resident).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WorkspaceRegions {
+    /// Materials, polygons, clusters and their children, sources, the walkers' stacks.
+    pub scene: u64,
+    /// Closed instances' records, their BVH and their transmittance towards each source.
+    pub instances: u64,
+    /// The light the closed instances received (three parts each).
+    pub received: u64,
+    /// The closed originals' tables.
+    pub tables: u64,
+    /// The polygons and BVHs of the originals whose closed instances block with them.
+    pub blocking: u64,
+    /// The light between closed instances, as laid out (for every ray) ...
+    pub exchange: u64,
+    /// ... and as written.
+    pub exchange_written: u64,
+    /// The radiance closed instances show gather rays, per direction.
+    pub radiance: u64,
+    /// Patches, links and bins: the blocks used and the pools' block tables.
+    pub blocks: u64,
+    /// The core's own BVH over the level's polygons and the executor's scratch.
+    pub bvh_scratch: u64,
 }
 
 impl Stats {

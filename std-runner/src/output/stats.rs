@@ -143,6 +143,35 @@ pub struct Levels {
     /// that depth was solved, its ancestors' part below it on the stack included (bytes).
     #[serde(default)]
     pub peak_workspace_bytes_by_depth: Vec<u64>,
+    /// The top level's workspace by what it holds (bytes).
+    #[serde(default)]
+    pub top_level_bytes: TopLevelBytes,
+}
+
+/// The top level's workspace by what it holds (bytes; see
+/// `hirad_core::hr::WorkspaceRegions`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TopLevelBytes {
+    /// Materials, polygons, clusters, sources, the walkers' stacks.
+    pub scene: u64,
+    /// Closed instances' records, their BVH, their transmittance towards each source.
+    pub instances: u64,
+    /// The light the closed instances received.
+    pub received_light: u64,
+    /// The closed originals' tables.
+    pub tables: u64,
+    /// The originals' own polygons and BVHs, for the instances that block with them.
+    pub blocking_geometry: u64,
+    /// The light between closed instances: laid out, and written (the rest is never
+    /// touched).
+    pub exchange_laid_out: u64,
+    pub exchange_written: u64,
+    /// The radiance closed instances show gather rays.
+    pub noted_radiance: u64,
+    /// Patches, links and bins.
+    pub patches_and_links: u64,
+    /// The core's BVH over the level's polygons and the executor's scratch.
+    pub bvh_and_scratch: u64,
 }
 
 /// One bin of [`Levels::leaf_histogram`]: the levels that held from `leaves_from` to
@@ -176,6 +205,21 @@ impl Levels {
             largest_level_leaves: s.largest_level,
             leaf_histogram,
             peak_workspace_bytes_by_depth: s.peak_bytes_by_depth[..depths].to_vec(),
+            top_level_bytes: {
+                let r = &s.top_regions;
+                TopLevelBytes {
+                    scene: r.scene,
+                    instances: r.instances,
+                    received_light: r.received,
+                    tables: r.tables,
+                    blocking_geometry: r.blocking,
+                    exchange_laid_out: r.exchange,
+                    exchange_written: r.exchange_written,
+                    noted_radiance: r.radiance,
+                    patches_and_links: r.blocks,
+                    bvh_and_scratch: r.bvh_scratch,
+                }
+            },
         }
     }
 }

@@ -99,6 +99,12 @@ fn report() -> SolveReport {
                 levels: 25,
             }],
             peak_workspace_bytes_by_depth: vec![1 << 20, 3 << 19, 7 << 18],
+            top_level_bytes: super::TopLevelBytes {
+                received_light: 4096,
+                exchange_laid_out: 8192,
+                exchange_written: 512,
+                ..Default::default()
+            },
         }),
         final_passes: Some(3),
         final_change_percent: Some(0.42),
