@@ -248,12 +248,11 @@ fn closed_instance<S: SceneSource>(
     Ok(Census {
         instances: 1,
         // The direct light of suns and sky, all the light, the exchange's.
-        received_floats: super::state::RECEIVED_PARTS as u64
-            * crate::tables::closed::received_floats(
-                t.bands as usize,
-                t.scatterers as usize,
-                t.incoming_side as usize * t.incoming_side as usize,
-            ) as u64,
+        received_floats: super::state::received_parts_floats(
+            t.bands as usize,
+            t.scatterers as usize,
+            t.incoming_side as usize * t.incoming_side as usize,
+        ) as u64,
         ..Census::default()
     })
 }

@@ -309,7 +309,8 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     let base = st.lay.exchange;
     ws[base + p[3]..base + p[4]].fill(0);
     for i in 0..n {
-        st.with_received(ws, i, 2, |_, r| r.clear());
+        let (at, len) = st.exchange_received_at(ws, i);
+        ws[at..at + 4 * len].fill(0);
     }
     let grid = grid();
     let mut opposite = [0u32; CELLS];
@@ -348,20 +349,23 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             if on != NONE && keeps_polygons(st, ws, to) {
                 let (q, side) = ((on >> 1) as usize, (on & 1) as usize);
                 let leaf = st.instance(ws, to);
-                st.with_received(ws, to, 2, |placed, r| {
-                    let Some(single) = placed.tables().single() else {
-                        return;
-                    };
-                    if q >= single.polygons() {
-                        return;
+                let (at, len) = st.exchange_received_at(ws, to);
+                let area = match st.placed(ws, to).tables().single() {
+                    Some(single) if q < single.polygons() => {
+                        single.polygon(q, 0).1 * leaf.scale * leaf.scale
                     }
-                    let area = single.polygon(q, 0).1 * leaf.scale * leaf.scale;
-                    if area > 0.0 {
-                        for (band, x) in power.iter().enumerate().take(nb) {
-                            r.add_first(q, side, band, x / area);
+                    _ => 0.0,
+                };
+                if area > 0.0 {
+                    let first = (q * 2 + side) * nb;
+                    let v = super::pool::floats_mut(ws, at, len);
+                    for (band, x) in power.iter().enumerate().take(nb) {
+                        let e = x / area;
+                        if e.is_finite() {
+                            v[first + band] += e;
                         }
                     }
-                });
+                }
             }
         }
     }
@@ -440,20 +444,23 @@ pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
         });
     }
     if landed {
-        let (from, n) = st.received_at(ws, i, 2);
-        let (to, _) = st.received_at(ws, i, part);
+        let (from, len) = st.exchange_received_at(ws, i);
+        let (to, n) = st.received_at(ws, i, part);
         let range = {
             let placed = st.placed(ws, i);
-            match crate::tables::closed::Received::over(&placed, super::pool::floats(ws, from, n)) {
+            match crate::tables::closed::Received::over(&placed, super::pool::floats(ws, to, n)) {
                 Ok(r) => r.first_range(),
                 Err(_) => return,
             }
         };
-        for k in range {
+        if range.len() != len {
+            return;
+        }
+        for (k, at) in range.enumerate() {
             let v: f32 = super::pool::read(ws, from + 4 * k);
             if v != 0.0 {
-                let w: f32 = super::pool::read(ws, to + 4 * k);
-                super::pool::write(ws, to + 4 * k, &(w + v));
+                let w: f32 = super::pool::read(ws, to + 4 * at);
+                super::pool::write(ws, to + 4 * at, &(w + v));
             }
         }
     }

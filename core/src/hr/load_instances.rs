@@ -41,7 +41,7 @@ pub(super) fn add_instance<S: SceneSource>(
     }
     s.instances += 1;
     // The direct light, all the light, the exchange's (see `State::received_at`).
-    let received = super::state::RECEIVED_PARTS * received_floats(&record);
+    let received = received_floats(&record);
     if s.received_floats + received > lay.n_received_floats() {
         return Err(HrError::SceneTooLarge);
     }
@@ -78,7 +78,7 @@ pub(super) fn add_instance<S: SceneSource>(
 
 /// Floats of the light an instance of the original of `record` receives.
 fn received_floats(record: &crate::image::TableRecord) -> usize {
-    crate::tables::closed::received_floats(
+    super::state::received_parts_floats(
         record.bands as usize,
         record.scatterers as usize,
         record.incoming_side as usize * record.incoming_side as usize,

@@ -93,8 +93,18 @@ pub(crate) struct State {
     pub stats: Stats,
 }
 
-/// Parts of a closed instance's received light (see [`State::received_at`]).
-pub(crate) const RECEIVED_PARTS: usize = 3;
+/// Floats of a closed instance's received light, all its parts (see
+/// [`State::received_at`]), for tables of `bands` bands, `scatterers` polygons kept apart and
+/// `incoming_cells` incoming cells: the direct light and all the light in full, the
+/// exchange's light on the polygons alone.
+pub(crate) const fn received_parts_floats(
+    bands: usize,
+    scatterers: usize,
+    incoming_cells: usize,
+) -> usize {
+    2 * crate::tables::closed::received_floats(bands, scatterers, incoming_cells)
+        + 2 * bands * scatterers
+}
 
 /// Geometry of an element, as the evaluation needs it.
 #[derive(Clone, Copy, Debug)]
@@ -495,16 +505,31 @@ impl State {
         crate::tables::closed::Placed::new(tables, place)
     }
 
-    /// Where closed instance `i`'s received light lies: the float offset in the received
-    /// region of part `part` (0: the direct light of suns and sky, fixed once lit; 1: all
-    /// the light, direct and through links; 2: the exchange's light on its polygons kept
-    /// apart, see `exchange`; [`RECEIVED_PARTS`] in all) and its length.
+    /// Where closed instance `i`'s received light lies: the byte offset of part `part`
+    /// (0: the direct light of suns and sky, fixed once lit; 1: all the light, direct and
+    /// through links, both laid out as [`crate::tables::closed::Received`]) and its length
+    /// in floats.
     pub(crate) fn received_at(&self, ws: &[u8], i: u32, part: usize) -> (usize, usize) {
+        debug_assert!(part < 2);
         let leaf = self.instance(ws, i);
         let n = self.placed(ws, i).received_len();
         (
             self.lay.received + 4 * (leaf.received as usize + part * n),
             n,
+        )
+    }
+
+    /// Where the exchange's light on closed instance `i`'s polygons kept apart lies (see
+    /// `exchange`): the byte offset and length in floats of its irradiance per polygon,
+    /// side and band, in the order of [`crate::tables::closed::Received::first_range`].
+    pub(crate) fn exchange_received_at(&self, ws: &[u8], i: u32) -> (usize, usize) {
+        let leaf = self.instance(ws, i);
+        let placed = self.placed(ws, i);
+        let n = placed.received_len();
+        let polygons = placed.tables().single().map_or(0, |s| s.polygons());
+        (
+            self.lay.received + 4 * (leaf.received as usize + 2 * n),
+            2 * self.bands * polygons,
         )
     }
 
