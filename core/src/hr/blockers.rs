@@ -176,11 +176,11 @@ pub(crate) fn light_along(
         return through;
     }
     let cells = RADIANCE_GRID.weights(-d);
-    let noted = |i: u32, band: usize, part: usize| -> f32 {
+    let noted = |i: u32, band: usize| -> f32 {
         let mut v = 0.0f32;
         for &(c, cw) in &cells {
             if cw > 0.0 {
-                v += cw * radiance(st, ws, i, c, band, part);
+                v += cw * radiance(st, ws, i, c, band);
             }
         }
         v
@@ -206,11 +206,13 @@ pub(crate) fn light_along(
                     Some((r, side))
                 });
             for (band, o) in out.iter_mut().enumerate() {
+                // (`noted` is the light scattered more than once where the polygon's own
+                // first scattering is read, see `shows_polygons`.)
                 let v = match &own {
                     Some((r, side)) => {
-                        r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band, 1)
+                        r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band)
                     }
-                    _ => noted(i, band, 0),
+                    _ => noted(i, band),
                 };
                 *o += w * v;
             }
@@ -229,29 +231,39 @@ const RADIANCE_GRID: crate::tables::grid::DirectionGrid =
 
 /// Bytes of the noted radiance of `n` closed instances (see [`note_radiance`]).
 pub(crate) fn radiance_bytes(n: u32, bands: usize) -> usize {
-    n as usize * RADIANCE_GRID.cells() as usize * bands * 2 * 4
+    n as usize * RADIANCE_GRID.cells() as usize * bands * 4
 }
 
-/// Where part `part` (0: the mean radiosity, 1: that of the light scattered more than once)
-/// of closed instance `i`'s noted radiance in cell `cell` and band `band` lies.
-fn radiance_at(st: &State, i: u32, cell: u32, band: usize, part: usize) -> usize {
+/// Where closed instance `i`'s noted radiance in cell `cell` and band `band` lies.
+fn radiance_at(st: &State, i: u32, cell: u32, band: usize) -> usize {
     let cells = RADIANCE_GRID.cells() as usize;
-    st.lay.radiance + 4 * (((i as usize * cells + cell as usize) * st.bands + band) * 2 + part)
+    st.lay.radiance + 4 * ((i as usize * cells + cell as usize) * st.bands + band)
 }
 
-fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize, part: usize) -> f32 {
-    super::pool::read(ws, radiance_at(st, i, cell, band, part))
+fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize) -> f32 {
+    super::pool::read(ws, radiance_at(st, i, cell, band))
+}
+
+/// True when a ray that meets closed instance `i` meets one of its polygons and reads that
+/// polygon's own first scattering (it blocks with its polygons and its tables keep them
+/// apart): its noted radiance is then that of its light scattered more than once, else
+/// that of all its light.
+fn shows_polygons(st: &State, ws: &[u8], i: u32) -> bool {
+    let slot = st.instance(ws, i).slot;
+    st.slot(ws, slot).polygons_kept != 0 && st.original_geometry(ws, slot).is_some()
 }
 
 /// Notes, for every closed instance, the radiosity (`pi` times the radiance, W/m^2 per
 /// band) its contents show an observer in each cell's direction: its tables' intensity
-/// that way over its cross-section, from the light it holds now; and the same of its light
-/// scattered more than once (its intensity less the first scattering's), which is added to
-/// the first scattering of the one polygon a ray meets. Gather rays read it (see
+/// that way over its cross-section, from the light it holds now; for one whose rays meet
+/// its polygons (see [`shows_polygons`]) only that of its light scattered more than once
+/// (its intensity less the first scattering's), which is added to the first scattering of
+/// the one polygon a ray meets. Gather rays read it (see
 /// [`light_along`]) once the level is solved: the tables' sum over all their cells for
 /// every ray was four fifths of a canopy's gather.
 pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
+        let part = usize::from(shows_polygons(st, ws, i));
         for cell in 0..RADIANCE_GRID.cells() {
             let o = RADIANCE_GRID.direction(cell);
             let mut v = [[0.0f32; 2]; crate::limits::MAX_BANDS];
@@ -269,9 +281,7 @@ pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
                 }
             }
             for (band, x) in v.iter().enumerate().take(st.bands) {
-                for (part, y) in x.iter().enumerate() {
-                    super::pool::write(ws, radiance_at(st, i, cell, band, part), y);
-                }
+                super::pool::write(ws, radiance_at(st, i, cell, band), &x[part]);
             }
         }
     }
