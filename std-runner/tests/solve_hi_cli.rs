@@ -141,8 +141,16 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
         .map(|(_, v)| v.as_u64().unwrap())
         .sum();
     assert!(laid_out <= peaks[0], "{levels}");
-    assert!(part("exchange_written") <= part("exchange_laid_out"), "{levels}");
-    for k in ["received_light", "tables", "patches_and_links", "noted_radiance"] {
+    assert!(
+        part("exchange_written") <= part("exchange_laid_out"),
+        "{levels}"
+    );
+    for k in [
+        "received_light",
+        "tables",
+        "patches_and_links",
+        "noted_radiance",
+    ] {
         assert!(part(k) > 0, "{k}: {levels}");
     }
     assert_eq!(

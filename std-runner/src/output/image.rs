@@ -5,8 +5,9 @@
 //! Shading (both formats): smooth by default, radiosity interpolated across the corners
 //! patches share (see [`super::smooth`]; the patches are kept, about 80 bytes each plus 8
 //! per band, a few hundred bytes more each for a moment while their shared corners are
-//! found, and the samples are coloured again when the image is written), or flat,
-//! every patch in its own value as it streams by. A PNG shows bands as colours or one band
+//! found, and the samples are coloured again when the image is written, or, with
+//! [`ImageSink::with_batch`], every so many patches: corners are then shared within a batch
+//! only, and memory stays bounded), or flat, every patch in its own value as it streams by. A PNG shows bands as colours or one band
 //! through a colour map with a bar (see [`super::display`]).
 
 use super::camera::Size;
@@ -75,6 +76,10 @@ pub struct ImageSink {
     store: Option<PatchStore>,
     /// Whether the framebuffer shows the smoothed values of every stored patch.
     shaded: bool,
+    /// Most patches kept for smooth shading before they are shaded and dropped.
+    batch: usize,
+    /// The drawing index of the store's first patch (see [`Rasterizer::drawn`]).
+    first: u32,
 }
 
 impl ImageSink {
@@ -101,7 +106,18 @@ impl ImageSink {
             display: Display::default_for(bands, band_names),
             store: Some(PatchStore::new(bands)),
             shaded: true,
+            batch: usize::MAX,
+            first: 0,
         })
+    }
+
+    /// Smooth shading in batches of at most `patches` patches (at least 1): each batch is
+    /// shaded, corners shared within it, and dropped once full, so that the image's memory
+    /// does not grow with the scene (for solves whose memory is bounded). Patches that meet
+    /// across a batch's end are shaded apart there. Default: one batch (all patches kept).
+    pub fn with_batch(mut self, patches: usize) -> Self {
+        self.batch = patches.max(1);
+        self
     }
 
     /// Chooses how patches are coloured (default smooth); call before any patch arrives.
@@ -127,7 +143,7 @@ impl ImageSink {
         if self.shaded {
             return;
         }
-        shade_all(&mut self.raster, store);
+        shade_all(&mut self.raster, store, self.first);
         self.shaded = true;
     }
 
@@ -216,6 +232,11 @@ impl Sink for ImageSink {
         if let Some(store) = &mut self.store {
             store.push(patch);
             self.shaded = false;
+            if store.len() >= self.batch {
+                self.shade();
+                self.store = Some(PatchStore::new(self.raster.bands()));
+                self.first = self.raster.drawn();
+            }
         }
         Ok(())
     }

@@ -8,8 +8,8 @@ use super::smooth::PatchStore;
 use glam::Vec3;
 
 /// Shades the samples of every patch of `store` in `raster`, whose patches were drawn in
-/// the same order since [`Rasterizer::track_owners`].
-pub fn shade_all(raster: &mut Rasterizer, store: &PatchStore) {
+/// the same order, the first as the `first`-th since [`Rasterizer::track_owners`].
+pub fn shade_all(raster: &mut Rasterizer, store: &PatchStore, first: u32) {
     let values = store.corner_values();
     let bands = raster.bands();
     for i in 0..store.len() {
@@ -25,7 +25,7 @@ pub fn shade_all(raster: &mut Rasterizer, store: &PatchStore) {
                     &[][..]
                 }
             };
-            raster.shade(i as u32, p.corners(), p.normal, [side(0), side(1)]);
+            raster.shade(first + i as u32, p.corners(), p.normal, [side(0), side(1)]);
             continue;
         }
         // A fan from the centre through corners and junctions (see `super::smooth`).
@@ -60,7 +60,12 @@ pub fn shade_all(raster: &mut Rasterizer, store: &PatchStore) {
             }
             let (front, back) = tri_values.split_at(3 * bands);
             let back = if sides == 2 { back } else { &[][..] };
-            raster.shade(i as u32, &[centre, a.0, b.0], p.normal, [front, back]);
+            raster.shade(
+                first + i as u32,
+                &[centre, a.0, b.0],
+                p.normal,
+                [front, back],
+            );
         }
     }
 }

@@ -388,3 +388,54 @@ fn no_crack_in_value_at_a_t_junction() {
         );
     }
 }
+
+fn render_batched(n: u32, batch: usize, patches: &[P]) -> Frame {
+    let dir = tempfile::tempdir().unwrap();
+    let mut sink = ImageSink::new(&dir.path().join("x.exr"), &camera(), size(n), 1, 1, &[])
+        .unwrap()
+        .with_batch(batch);
+    feed(&mut sink, patches);
+    sink.frame()
+}
+
+#[test]
+fn batches_bound_what_smooth_shading_keeps() {
+    // Two squares of four patches side by side, a patch in front of them drawn last and
+    // one behind them drawn first.
+    let mut patches = vec![rect(-2.0, -2.0, 2.0, 2.0, 1.0, 7.0)];
+    patches.extend(four());
+    for p in four() {
+        let mut q = p;
+        for c in &mut q.corners {
+            c.x += 2.5;
+        }
+        q.front[0] *= 0.5;
+        patches.push(q);
+    }
+    patches.push(rect(-0.25, -0.25, 0.25, 0.25, -0.5, 9.0));
+    let all = render(80, Shading::Smooth, &patches);
+    // A batch as large as the scene: the same picture, bit for bit.
+    for batch in [patches.len(), 1000] {
+        assert_eq!(render_batched(80, batch, &patches).data, all.data);
+    }
+    // Batches of one patch share no corner: flat shading (to rounding).
+    let flat = render(80, Shading::Flat, &patches);
+    let ones = render_batched(80, 1, &patches);
+    for (a, b) in ones.data.iter().zip(&flat.data) {
+        assert!((a - b).abs() <= 1e-5 * b.abs().max(1.0), "{a} {b}");
+    }
+    // Batches of one square each: the same as one batch, for the squares share no corner.
+    let squares = &patches[1..9];
+    assert_eq!(
+        render_batched(80, 4, squares).data,
+        render(80, Shading::Smooth, squares).data
+    );
+    // Depth order holds across batches: the patch in front, in a later batch, hides the
+    // squares; the one behind, in an earlier batch, shows only around them.
+    let small = render_batched(80, 3, &patches);
+    let near = |v: f32, l: f32| (v - l).abs() < 1e-4;
+    for (s, f) in small.data.iter().zip(&flat.data) {
+        assert_eq!(near(*s, 9.0), *f == 9.0);
+        assert_eq!(near(*s, 7.0), *f == 7.0);
+    }
+}
