@@ -222,9 +222,62 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("--instancing"), "{err}");
     }
-    // The scene without tables: an input error that says how to make them.
-    let out = hirad(&["solve", s(&plant), "--method", "hi", "-q"]);
-    assert_eq!(out.status.code(), Some(3));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("hirad tables"), "{err}");
+    // The scene without tables: hi makes them (coarse here), caches them, and a second run
+    // reads them from the cache: the same results, in no time.
+    let cache = dir.path().join("cache");
+    let run = |csv: &std::path::Path, json: &std::path::Path| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
+            .args([
+                "solve",
+                s(&plant),
+                "--method",
+                "hi",
+                "--table-max-side",
+                "4",
+                "--results",
+                s(csv),
+                "--stats",
+                s(json),
+            ])
+            .env("HIRAD_CACHE", &cache)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+        (err, v)
+    };
+    let (made, made_json) = (dir.path().join("made.csv"), dir.path().join("made.json"));
+    let (err, v) = run(&made, &made_json);
+    assert!(
+        err.contains("no directional tables for twig, branch"),
+        "{err}"
+    );
+    assert!(err.contains("tables: 2 originals (twig, branch)"), "{err}");
+    let t = &v["tables"];
+    assert_eq!(t["originals"], serde_json::json!(["twig", "branch"]), "{t}");
+    assert_eq!(t["cache_hits"], 0, "{t}");
+    assert_eq!(v["phases"][0]["phase"], "tables", "{v}");
+    assert!(cache.read_dir().unwrap().count() >= 2);
+    let (again, again_json) = (dir.path().join("again.csv"), dir.path().join("again.json"));
+    let (_, w) = run(&again, &again_json);
+    assert_eq!(w["tables"]["cache_hits"], 2, "{w}");
+    assert!(std::fs::read(&made).unwrap() == std::fs::read(&again).unwrap());
+    let (ids, by) = absorbed(&std::fs::read_to_string(&made).unwrap());
+    assert_eq!(ids, hr_ids);
+    for (m, want) in &hr_by {
+        for b in 0..2 {
+            let got = by[m][b];
+            assert!(
+                (got / want[b] - 1.0).abs() <= 0.1,
+                "{m} band {b}: hi with coarse tables {got} hr {}",
+                want[b]
+            );
+        }
+    }
 }

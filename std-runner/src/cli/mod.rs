@@ -7,7 +7,6 @@ mod info;
 mod progress;
 mod solve;
 mod tables;
-pub use tables::instanced_originals;
 mod verdict;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};

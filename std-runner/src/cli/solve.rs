@@ -54,6 +54,11 @@ pub struct Args {
     /// `--method hr`, results identical). Default: `all` with `--method hi`.
     #[arg(long, value_enum)]
     pub instancing: Option<InstancingChoice>,
+    /// Largest side of every direction grid of the tables `--method hi` makes for originals
+    /// the scene has none for (4 to 128; default: those of `hirad tables`): coarser tables,
+    /// made faster. Tables come from the table cache when it holds them.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(4..=128))]
+    pub table_max_side: Option<u32>,
     /// Refinement threshold (hr): a link is refined while its transfer exceeds epsilon times
     /// the scene's emitted power. Dimensionless; smaller is finer and slower.
     #[arg(long, default_value_t = 1e-3)]
@@ -245,6 +250,48 @@ pub fn run(a: Args) -> Result<()> {
     warn_unused(&a);
     let mut loaded = files::load_scene(&a.scene)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
+    let progress = Progress::new(a.quiet);
+    // Hierarchical instantiation needs every instanced original's tables: those the scene
+    // lacks come from the table cache, or are made now (and cached).
+    let mut tables_made = None;
+    if a.method == Method::Hi {
+        let missing = crate::tables::missing(&loaded.scene);
+        if !missing.is_empty() {
+            if !a.quiet {
+                let names: Vec<&str> = missing
+                    .iter()
+                    .map(|&o| loaded.scene.originals[o].name.as_str())
+                    .collect();
+                eprintln!(
+                    "note: {} has no directional tables for {}: taking them from the table cache or making them now (minutes per original at the defaults; `hirad tables SCENE -o OUT.hirb` keeps them in a file)",
+                    a.scene.display(),
+                    names.join(", ")
+                );
+            }
+            let made = crate::tables::complete(
+                &mut loaded.scene,
+                threads,
+                a.table_max_side,
+                &mut |what: &str, done: u64, total: u64| progress.phase_at(what, Some(total), done),
+            )
+            .with_context(|| format!("{}: making its directional tables", a.scene.display()))?;
+            progress.finish();
+            if !a.quiet && !made.unmet.is_empty() {
+                eprintln!(
+                    "warning: the tables of {} missed their error targets on the finest grids allowed{}; the solve goes on with them",
+                    made.unmet.join(", "),
+                    if a.table_max_side.is_some() {
+                        " (--table-max-side)"
+                    } else {
+                        ""
+                    }
+                );
+            }
+            tables_made = Some(made);
+        }
+    } else if a.table_max_side.is_some() && !a.quiet {
+        eprintln!("warning: --table-max-side has no effect without --method hi");
+    }
     let up = a.up.unwrap_or(loaded.up);
     let bytes = files::compile(&a.scene, &loaded.scene)?;
     let info = *crate::scene::read_image(&bytes)
@@ -252,7 +299,10 @@ pub fn run(a: Args) -> Result<()> {
         .info();
     // Hierarchical instantiation from a `.hirb` reads the file on demand: its tables go
     // into the workspace once, and the model keeps none (a canopy's are 20 MB a copy).
-    let image = if a.method == Method::Hi && loaded.format == files::Format::Binary {
+    let image = if a.method == Method::Hi
+        && loaded.format == files::Format::Binary
+        && tables_made.is_none()
+    {
         let view = files::open_image(&a.scene)?;
         loaded.scene.tables = Vec::new();
         Some(view)
@@ -415,7 +465,6 @@ pub fn run(a: Args) -> Result<()> {
         );
     }
 
-    let progress = Progress::new(a.quiet);
     let method = match (a.method, instancing) {
         (Method::Hr, None) => "hr",
         (Method::Hi | Method::Hr, Some(_)) => "hi",
@@ -526,14 +575,27 @@ pub fn run(a: Args) -> Result<()> {
             report.levels = (a.method == Method::Hi).then(|| crate::output::Levels::of(&s));
             report.final_change_percent =
                 Some(100.0 * s.final_change as f64).filter(|_| s.final_passes > 1);
-            report.phases = run
-                .phases
+            report.phases = tables_made
                 .iter()
-                .map(|(phase, seconds)| crate::output::PhaseTime {
-                    phase: phase.clone(),
-                    seconds: *seconds,
+                .map(|t| crate::output::PhaseTime {
+                    phase: "tables".into(),
+                    seconds: t.seconds,
                 })
+                .chain(
+                    run.phases
+                        .iter()
+                        .map(|(phase, seconds)| crate::output::PhaseTime {
+                            phase: phase.clone(),
+                            seconds: *seconds,
+                        }),
+                )
                 .collect();
+            report.tables = tables_made.as_ref().map(|t| crate::output::TablesMade {
+                originals: t.originals.clone(),
+                cache_hits: t.cache_hits,
+                targets_missed: t.unmet.clone(),
+                seconds: t.seconds,
+            });
             report.elements = s.clusters + s.patches;
             report.links = s.links;
             report.iterations = s.iterations;

@@ -2,11 +2,11 @@
 
 use crate::files;
 use crate::output::Progress;
-use crate::scene::{Cluster, Scene};
+
 use crate::solve::RayonExecutor;
 use crate::tables::{
-    Cache, CheckReport, OriginalTables, TableSettings, bake_alone, check, write_bidirectional,
-    write_directions,
+    Cache, CheckReport, OriginalTables, TableSettings, check, instanced_originals, obtain,
+    write_bidirectional, write_directions,
 };
 use anyhow::Result;
 use std::fmt::Write as _;
@@ -86,57 +86,6 @@ pub struct Args {
     /// No progress and no warnings.
     #[arg(long, short)]
     pub quiet: bool,
-}
-
-/// The originals that some instance uses, in an order where an original comes after every
-/// original it holds instances of.
-pub fn instanced_originals(scene: &Scene) -> Vec<usize> {
-    fn used(c: &Cluster, out: &mut Vec<bool>) {
-        if let Some(i) = &c.instance {
-            out[i.original] = true;
-        }
-        for ch in &c.children {
-            used(ch, out);
-        }
-    }
-    let n = scene.originals.len();
-    let mut is_used = vec![false; n];
-    used(&scene.root, &mut is_used);
-    // Nesting depth: how many levels of originals an original holds below it.
-    let mut depth = vec![usize::MAX; n];
-    fn depth_of(scene: &Scene, o: usize, depth: &mut Vec<usize>, guard: usize) -> usize {
-        if depth[o] != usize::MAX || guard > scene.originals.len() {
-            return depth[o].min(guard);
-        }
-        let mut inner = Vec::new();
-        fn collect(c: &Cluster, out: &mut Vec<usize>) {
-            if let Some(i) = &c.instance {
-                out.push(i.original);
-            }
-            for ch in &c.children {
-                collect(ch, out);
-            }
-        }
-        collect(&scene.originals[o].root, &mut inner);
-        let d = inner
-            .iter()
-            .map(|&i| depth_of(scene, i, depth, guard + 1) + 1)
-            .max()
-            .unwrap_or(0);
-        depth[o] = d;
-        d
-    }
-    for o in 0..n {
-        depth_of(scene, o, &mut depth, 0);
-        let mut inner = vec![false; n];
-        used(&scene.originals[o].root, &mut inner);
-        for (u, i) in is_used.iter_mut().zip(inner) {
-            *u |= i;
-        }
-    }
-    let mut order: Vec<usize> = (0..n).filter(|&o| is_used[o]).collect();
-    order.sort_by_key(|&o| (depth[o], o));
-    order
 }
 
 /// Runs `hirad tables`.
@@ -256,30 +205,8 @@ pub fn run(a: Args) -> Result<()> {
         let mut report = |what: &str, done: u64, total: u64| {
             progress.phase_at(what, Some(total), done);
         };
-        let name = scene.originals[o].name.clone();
-        let start = std::time::Instant::now();
-        let alone = crate::tables::Alone::new(&scene, o)?;
-        let key = Cache::key(&scene, &alone, &settings);
-        let cached = cache.as_ref().and_then(|c| c.load(&key, &name, o));
-        let t = match cached {
-            Some(mut t) => {
-                cache_hits += 1;
-                t.seconds = start.elapsed().as_secs_f64();
-                t
-            }
-            None => {
-                let t = bake_alone(&scene, o, &alone, &settings, &mut exec, &mut report)?;
-                if let Some(c) = &cache
-                    && let Err(e) = c.store(&key, &t)
-                {
-                    eprintln!(
-                        "warning: the table cache {} cannot be written ({e:#}); the tables were computed and are used",
-                        c.dir().display()
-                    );
-                }
-                t
-            }
-        };
+        let (t, hit) = obtain(&scene, o, &settings, cache.as_ref(), &mut exec, &mut report)?;
+        cache_hits += u32::from(hit);
         progress.finish();
         super::print_out(&summary(&t))?;
         if let Some(n) = a.check {

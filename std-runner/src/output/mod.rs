@@ -48,7 +48,7 @@ pub use results_read::{TableError, read_results, read_results_file};
 pub use row_labels::RowLabels;
 pub use stats::{
     BandPower, ImageSettings, LeafBin, Levels, OutputFile, PhaseTime, RaysByPhase, RunSettings,
-    SolveReport, TopLevelBytes, Verdict,
+    SolveReport, TablesMade, TopLevelBytes, Verdict,
 };
 
 #[cfg(test)]

@@ -174,6 +174,19 @@ pub struct TopLevelBytes {
     pub bvh_and_scratch: u64,
 }
 
+/// The directional tables a `--method hi` run made or read from the cache.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TablesMade {
+    /// The originals, by name.
+    pub originals: Vec<String>,
+    /// How many came from the table cache.
+    pub cache_hits: u32,
+    /// Those whose tables missed their error targets on the finest grids allowed.
+    pub targets_missed: Vec<String>,
+    /// Wall-clock seconds, cache reads included.
+    pub seconds: f64,
+}
+
 /// One bin of [`Levels::leaf_histogram`]: the levels that held from `leaves_from` to
 /// `leaves_to` leaf elements (both included).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -313,6 +326,10 @@ pub struct SolveReport {
     /// Hierarchical instantiation's levels (`null` for the other methods).
     #[serde(default)]
     pub levels: Option<Levels>,
+    /// The directional tables this run took from the table cache or made (`--method hi` on
+    /// a scene without them; `null` otherwise). Their time is not in `phases`' solve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tables: Option<TablesMade>,
     /// Final gather passes made, the polygons' own included (hr; 0 without the gather;
     /// `null` for the exact solver).
     #[serde(default)]
@@ -428,6 +445,22 @@ impl SolveReport {
             "  {} polygons, {} elements, {} links, {} iterations, {} refinement passes",
             self.polygons, self.elements, self.links, self.iterations, self.refinement_passes
         )?;
+        if let Some(t) = &self.tables {
+            writeln!(
+                out,
+                "  tables: {} original{} ({}) in {:.3} s, {} from the table cache{}",
+                t.originals.len(),
+                if t.originals.len() == 1 { "" } else { "s" },
+                t.originals.join(", "),
+                t.seconds,
+                t.cache_hits,
+                if t.targets_missed.is_empty() {
+                    String::new()
+                } else {
+                    format!("; targets missed: {}", t.targets_missed.join(", "))
+                }
+            )?;
+        }
         if let Some(l) = &self.levels {
             let bins: Vec<String> = l
                 .leaf_histogram

@@ -106,6 +106,12 @@ fn report() -> SolveReport {
                 ..Default::default()
             },
         }),
+        tables: Some(super::TablesMade {
+            originals: vec!["twig".into(), "branch".into()],
+            cache_hits: 1,
+            targets_missed: vec!["twig".into()],
+            seconds: 2.5,
+        }),
         final_passes: Some(3),
         final_change_percent: Some(0.42),
         image_error_percent: Some(1.5),
@@ -137,6 +143,8 @@ fn summary_tells_power_and_convergence() {
     exact.method = "exact".into();
     exact.epsilon = None;
     exact.budget_limited = false;
+    exact.levels = None;
+    exact.tables = None;
     let mut text = Vec::new();
     exact.print_summary(&mut text).unwrap();
     let text = String::from_utf8(text).unwrap();

@@ -5,11 +5,11 @@
 //! over the area `a |cosine|`.
 
 use super::{OriginalTables, TableSettings, bake_original};
-use crate::cli::instanced_originals;
 use crate::generate::palette::two_sided;
 use crate::generate::shapes::add_quad;
 use crate::scene::{Cluster, InstanceOf, Original, Scene, Similarity};
 use crate::solve::RayonExecutor;
+use crate::tables::instanced_originals;
 use glam::Vec3;
 use hirad_core::sampling::{hash3, unit2};
 use hirad_core::tables::bake::TauSettings;
