@@ -104,6 +104,32 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     assert!(json.contains("\"solved\": 26"), "{json}");
     assert!(json.contains("\"deepest\": 2"), "{json}");
     assert!(json.contains("\"closed_instances\": 25"), "{json}");
+    // The balance is the levels' sum (each level's leaves, their light escaping only out
+    // of the scene): what enters agrees with hr's, and it closes as hr's does.
+    let hr_stats = dir.path().join("hr.json");
+    let out = hirad(&["solve", s(&image), "--stats", s(&hr_stats), "-q"]);
+    assert!(out.status.success());
+    let hr_v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&hr_stats).unwrap()).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    for b in 0..2 {
+        let (p, q) = (&v["power"][b], &hr_v["power"][b]);
+        let (hi_in, hr_in) = (p["direct"].as_f64().unwrap(), q["direct"].as_f64().unwrap());
+        assert!(
+            (hi_in / hr_in - 1.0).abs() < 0.01,
+            "band {b}: in {hi_in} {hr_in}"
+        );
+        let (hi_esc, hr_esc) = (
+            p["escaped"].as_f64().unwrap(),
+            q["escaped"].as_f64().unwrap(),
+        );
+        assert!(
+            (hi_esc / hr_esc - 1.0).abs() < 0.03,
+            "band {b}: escaped {hi_esc} {hr_esc}"
+        );
+        let imbalance = p["imbalance_percent"].as_f64().unwrap();
+        assert!(imbalance.abs() < 1.5, "band {b}: {imbalance}%");
+    }
     // Every level in one bin of the histogram by leaf elements; the stack's peak grows with
     // depth (a child opens above its parent's part of the workspace).
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();

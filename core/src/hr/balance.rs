@@ -59,11 +59,38 @@ impl Balance {
     }
 }
 
+impl Balance {
+    /// Adds `other`'s powers to these, band by band.
+    pub fn add(&mut self, other: &Balance) {
+        for b in 0..MAX_BANDS {
+            self.emitted[b] += other.emitted[b];
+            self.direct[b] += other.direct[b];
+            self.absorbed[b] += other.absorbed[b];
+            self.absorbed_backs[b] += other.absorbed_backs[b];
+            self.escaped[b] += other.escaped[b];
+        }
+    }
+}
+
+/// What a balance covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Scope {
+    /// The whole scene in one level: its leaves and its closed instances (the light they
+    /// scatter estimated from their tables), at least [`MIN_BUDGET`] rays.
+    Scene,
+    /// One level of hierarchical instantiation, its leaves only (each closed instance is
+    /// counted by the level it opens into): a leaf's light escapes only if it leaves the
+    /// scene through every level this one is open in; `rays` per leaf, no minimum (the
+    /// levels' sum is the solve's balance).
+    Level,
+}
+
 struct Ctx<'a, 'v, V: ?Sized> {
     st: &'a State,
     ws: &'a [u8],
     vis: &'a Vis<'v, V>,
     out: Balance,
+    scope: Scope,
 }
 
 /// Measures the balance of the current solution: `rays` per leaf on average, between
@@ -78,6 +105,7 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
     vis: &Vis<'_, V>,
     ex: &mut Fallback<'_, E>,
     rays: u32,
+    scope: Scope,
     progress: &mut dyn Progress,
 ) -> Balance {
     let nb = st.bands;
@@ -94,13 +122,17 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
             }
         }
     }
-    let budget = (rays as f64 * leaves as f64).clamp(MIN_BUDGET, MAX_BUDGET);
+    let budget = match scope {
+        Scope::Scene => (rays as f64 * leaves as f64).clamp(MIN_BUDGET, MAX_BUDGET),
+        Scope::Level => (rays as f64 * leaves as f64).min(MAX_BUDGET),
+    };
     let per_watt = if total > 0.0 { budget / total } else { 0.0 };
     let mut ctx = Ctx {
         st,
         ws,
         vis,
         out: Balance::default(),
+        scope,
     };
     // Per leaf: escaping and back-absorbed fractions per side, and the back direct light of
     // one-sided polygons per band.
@@ -129,7 +161,8 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
                     }
                     let o = &mut buf[slot * per..(slot + 1) * per];
                     let share = (per_watt * leaving(c.st, c.ws, e, &p) as f64) as u32;
-                    fates(c.st, c.ws, e, share.clamp(1, MAX_RAYS), &ray, o);
+                    let beyond = c.scope == Scope::Level;
+                    fates(c.st, c.ws, e, share.clamp(1, MAX_RAYS), &ray, beyond, o);
                 }
             },
             |c: &mut Ctx<'_, '_, V>, chunk, buf| {
@@ -154,7 +187,7 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
         );
         offset += n as u64;
     }
-    if st.instances > 0 {
+    if st.instances > 0 && scope == Scope::Scene {
         let ray = Ray {
             vis,
             polys: WsPolygons { st, ws },
@@ -295,6 +328,7 @@ fn fates<V: Visibility + ?Sized>(
     e: Elem,
     rays: u32,
     vis: &V,
+    beyond: bool,
     out: &mut [f32],
 ) {
     let nb = st.bands;
@@ -342,6 +376,10 @@ fn fates<V: Visibility + ?Sized>(
             );
             let end = st.beyond(x, d);
             match vis.first_hit(x, end, [p.poly, NONE]) {
+                // On out of the levels this one is open in, to the scene's edge.
+                None if beyond => {
+                    escaped += vis.transmittance_towards(x, end, d, [p.poly, NONE]);
+                }
                 // What closed instances on the way intercept, their links carry.
                 None if st.instances > 0 => escaped += vis.transmittance(x, end, [p.poly, NONE]),
                 None => escaped += 1.0,

@@ -94,9 +94,17 @@ where
         levels: 0,
         unit_power: 0.0,
         scene_sides,
+        balance: super::balance::Balance::default(),
+        absorbed: Some([0.0; MAX_BANDS]),
     };
     level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
     let levels = ctx.levels;
+    let mut balance = ctx.balance;
+    // As hr's: absorption from the light every polygon gathered, where it gathered.
+    if let Some(a) = ctx.absorbed {
+        balance.absorbed = a;
+    }
+    total.balance = balance;
     total.workspace_bytes = workspace.len() as u64;
     total.levels = levels;
     Ok(total)
@@ -116,6 +124,11 @@ struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
     unit_power: f32,
     /// The whole scene's receiving sides (see `State::scene_sides`).
     scene_sides: u64,
+    /// The levels' balances so far (see `balance::Scope::Level`).
+    balance: super::balance::Balance,
+    /// What the polygons handed out absorbed, from their gathered light (W per band); `None`
+    /// once a level hands them out without a gather.
+    absorbed: Option<[f64; MAX_BANDS]>,
 }
 
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
@@ -185,16 +198,17 @@ where
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     st.stats.emitted_power = st.power;
     ctx.levels += 1;
-    // The top level's balance stands for the solve (an opened level's would count the light
-    // leaving its box as escaped): measured there only.
-    if depth == 0 {
+    // The solve's balance is the levels' sum: each level's leaves (a closed instance is
+    // counted by the level it opens into), their light escaping only out of the scene.
+    {
         let mut seq = Fallback {
             inner: &mut *exec,
             scratch: &mut *scratch,
         };
         let rays = 4 * st.settings.rays;
-        let balance = super::balance::measure(&st, ws, &vis, &mut seq, rays, ctx.progress);
-        st.stats.balance = balance;
+        let scope = super::balance::Scope::Level;
+        let balance = super::balance::measure(&st, ws, &vis, &mut seq, rays, scope, ctx.progress);
+        ctx.balance.add(&balance);
     }
     // What its closed instances show gather rays, here and from the levels opened in it.
     super::blockers::note_radiance(&st, ws);
@@ -321,7 +335,7 @@ where
         inner: exec,
         scratch,
     };
-    super::output::emit_range(
+    let written = super::output::emit_range(
         st,
         ws,
         vis,
@@ -333,6 +347,15 @@ where
         id_offset,
     )
     .map_err(SolveError::Sink)?;
+    ctx.absorbed = match (ctx.absorbed, written.absorbed) {
+        (Some(mut sum), Some(a)) => {
+            for (s, x) in sum.iter_mut().zip(a) {
+                *s += x;
+            }
+            Some(sum)
+        }
+        _ => None,
+    };
     Ok(())
 }
 

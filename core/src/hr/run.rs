@@ -260,7 +260,15 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.emitted_power = st.power;
         Self::relight_with(st, ws, &self.vis, &mut self.seq, progress);
         let rays = 4 * st.settings.rays;
-        st.stats.balance = balance::measure(st, ws, &self.vis, &mut self.seq, rays, progress);
+        st.stats.balance = balance::measure(
+            st,
+            ws,
+            &self.vis,
+            &mut self.seq,
+            rays,
+            balance::Scope::Scene,
+            progress,
+        );
         super::blockers::note_radiance(st, ws);
         progress.report(output::phase(st, ws), 0, st.polygons as u64);
         let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
