@@ -44,10 +44,22 @@ const INTERNAL: u32 = NONE;
 const NOBODY: u32 = (1 << 26) - 1;
 
 /// Bytes of one entry: the receiver and the cell of the light's direction of travel
-/// (`u32`: receiver << 6 | cell), where on the receiver (`u32`: its polygon << 1 | side,
-/// `NONE` for a receiver without polygons), then the share of the emitter's escaping light
-/// in that cell it takes (`f32`).
-const ENTRY_BYTES: usize = 12;
+/// (`u32`: receiver << 6 | cell), then how many of the emitter's escaping rays in that cell
+/// land there and where on the receiver (`u32`: count << 21 | its polygon << 1 | side, or
+/// count << 21 | [`NOWHERE`] for a receiver without polygons). The count over the cell's
+/// escaping rays is the share of the emitter's escaping light in that cell it takes.
+const ENTRY_BYTES: usize = 8;
+/// Bits of an entry's second word that say where on the receiver it lands.
+const AT_BITS: u32 = 21;
+/// Where an entry lands on a receiver without polygons.
+const NOWHERE: u32 = (1 << AT_BITS) - 1;
+
+// A ray count fits above the landing place (RAYS rays per instance at most).
+const _: () = assert!(RAYS < 1 << (32 - AT_BITS));
+// Every blocking polygon's side (polygon indices below their count) fits below it.
+const _: () = assert!(
+    ((super::original_geometry::MAX_BLOCKING_POLYGONS as u64 - 1) << 1 | 1) < NOWHERE as u64
+);
 
 /// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
 /// entries, per instance and cell its escaping rays (their mean direction and how many,
@@ -266,22 +278,16 @@ fn flush<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
     while k < c.hits.len() {
         let both = c.hits[k];
         let (key, at_on) = ((both >> 32) as u32, both as u32);
-        let cell = (key & 63) as usize;
         let mut m = k;
         while m < c.hits.len() && c.hits[m] == both {
             m += 1;
         }
-        // The share of the cell's escaping rays that land there.
-        let escaped = c.towards[cell][3];
-        let share = if escaped > 0.0 {
-            (m - k) as f32 / escaped
-        } else {
-            0.0
-        };
+        // How many of the cell's escaping rays land there, and where.
+        let landing = if at_on == NONE { NOWHERE } else { at_on };
+        let word = ((m - k) as u32) << AT_BITS | landing;
         let at = base + p[1] + ENTRY_BYTES * c.written as usize;
         super::pool::write(c.ws, at, &key);
-        super::pool::write(c.ws, at + 4, &at_on);
-        super::pool::write(c.ws, at + 8, &share);
+        super::pool::write(c.ws, at + 4, &word);
         c.written += 1;
         k = m;
     }
@@ -329,13 +335,23 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
         for e in first..last {
             let at = base + p[1] + ENTRY_BYTES * e as usize;
             let key: u32 = super::pool::read(ws, at);
-            let on: u32 = super::pool::read(ws, at + 4);
+            let word: u32 = super::pool::read(ws, at + 4);
+            let on = match word & NOWHERE {
+                NOWHERE => NONE,
+                x => x,
+            };
             let cell = (key & 63) as usize;
             let to = key >> 6;
             if to >= n {
                 continue;
             }
-            let share: f32 = super::pool::read(ws, at + 8);
+            // The share of the cell's escaping rays that land there.
+            let escaped = cell_rays(st, ws, j, cell, &p);
+            let share = if escaped > 0.0 {
+                (word >> AT_BITS) as f32 / escaped
+            } else {
+                0.0
+            };
             let mut power = [0.0f32; MAX_BANDS];
             for (band, x) in power.iter_mut().enumerate().take(nb) {
                 *x = sent[cell][band] * share;
@@ -369,6 +385,15 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             }
         }
     }
+}
+
+/// Closed instance `j`'s escaping rays in cell `cell` (see [`build`]).
+fn cell_rays(st: &State, ws: &[u8], j: u32, cell: usize, p: &[usize; 5]) -> f32 {
+    let v: [f32; 4] = super::pool::read(
+        ws,
+        st.lay.exchange + p[2] + 16 * (j as usize * CELLS + cell),
+    );
+    v[3]
 }
 
 /// True when closed instance `i`'s tables keep its polygons apart, in the order of its own

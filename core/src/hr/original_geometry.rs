@@ -20,14 +20,19 @@ use crate::limits::{MAX_NODE_DEPTH, NONE};
 use crate::{NodeId, OriginalId, PolyId, VertexId};
 use glam::Vec3;
 
-/// The polygons `original` blocks with when closed, if it does: at most `limit` once
-/// expanded (and at least one).
+/// Most polygons an original may block with (the exchange notes where its rays land in 20
+/// bits, see `exchange`).
+pub(crate) const MAX_BLOCKING_POLYGONS: u32 = (1 << 20) - 1;
+
+/// The polygons `original` blocks with when closed, if it does: at most `limit` (and
+/// [`MAX_BLOCKING_POLYGONS`]) once expanded, and at least one.
 pub(crate) fn blocking_polygons<S: SceneSource>(
     view: &SceneView<S>,
     original: u32,
     limit: u32,
 ) -> Result<Option<u32>, HrError> {
     let n = view.original(OriginalId(original))?.expanded_polygons;
+    let limit = limit.min(MAX_BLOCKING_POLYGONS);
     Ok((n > 0 && n <= limit as u64).then_some(n as u32))
 }
 

@@ -130,7 +130,8 @@ pub struct Args {
     /// Closed instances (hi) whose original has at most this many polygons, once expanded,
     /// block rays with the original's own polygons (their shadows are the contents' own, at
     /// about 120 bytes of workspace per polygon of each such original); larger ones block as
-    /// a medium, by their tables' transmittance. 0: all by transmittance.
+    /// a medium, by their tables' transmittance. 0: all by transmittance; values above
+    /// 1,048,575 count as that.
     #[arg(long, default_value_t = Settings::BLOCKING_POLYGONS)]
     pub blocking_polygons: u32,
     /// Final gather (hr): rays per receiving side of every polygon, from which each polygon
