@@ -115,8 +115,10 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     for b in 0..2 {
         let (p, q) = (&v["power"][b], &hr_v["power"][b]);
         let (hi_in, hr_in) = (p["direct"].as_f64().unwrap(), q["direct"].as_f64().unwrap());
+        // (The light that reached an opened level through links is not what enters: counted
+        // as such, it made NIR's 0.67% too much here and 12.8% in a dense canopy.)
         assert!(
-            (hi_in / hr_in - 1.0).abs() < 0.01,
+            (hi_in / hr_in - 1.0).abs() < 0.002,
             "band {b}: in {hi_in} {hr_in}"
         );
         let (hi_esc, hr_esc) = (
@@ -128,7 +130,7 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
             "band {b}: escaped {hi_esc} {hr_esc}"
         );
         let imbalance = p["imbalance_percent"].as_f64().unwrap();
-        assert!(imbalance.abs() < 1.5, "band {b}: {imbalance}%");
+        assert!(imbalance.abs() < 0.5, "band {b}: {imbalance}%");
     }
     // Every level in one bin of the histogram by leaf elements; the stack's peak grows with
     // depth (a child opens above its parent's part of the workspace).

@@ -136,7 +136,7 @@ pub(crate) fn measure<V: Visibility + ?Sized, E: Executor>(
     };
     // Per leaf: escaping and back-absorbed fractions per side, and the back direct light of
     // one-sided polygons per band.
-    let per = 4 + nb;
+    let per = 4 + 2 * nb;
     // Both pools under one phase: the count runs on over them.
     let all = st.pool(Kind::Patch1).len as u64 + st.pool(Kind::Patch2).len as u64;
     let mut offset = 0u64;
@@ -276,7 +276,9 @@ fn leaving(st: &State, ws: &[u8], e: Elem, p: &super::records::Patch) -> f32 {
     w * p.area * p.exposed
 }
 
-/// Adds one leaf's part of the balance.
+/// Adds one leaf's part of the balance. The direct light that came through the links of
+/// the levels around (an opened level's binned beams, see `State::linked`) is light from
+/// other surfaces, not what enters the scene: left out of `direct`.
 fn add_leaf(st: &State, ws: &[u8], e: Elem, fate: &[f32], out: &mut Balance) {
     let nb = st.bands;
     let p = st.patch(ws, e);
@@ -299,11 +301,13 @@ fn add_leaf(st: &State, ws: &[u8], e: Elem, fate: &[f32], out: &mut Balance) {
         super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
         let bside = st.b(ws, e, side).unwrap_or(&[]);
         let direct = st.direct(ws, e, side);
+        let linked = st.linked(ws, e, side);
         for b in 0..nb {
             let absorb = 1.0 - m.rho[side][b] as f64 - m.tau[b] as f64;
             out.absorbed[b] += seen * absorb * h[b] as f64;
             if let Some(d) = direct {
-                out.direct[b] += seen * d[b] as f64;
+                let through_links = linked.map_or(0.0, |l| l[b]);
+                out.direct[b] += seen * (d[b] - through_links) as f64;
             }
             let leaving = seen * bside.get(b).copied().unwrap_or(0.0) as f64;
             out.escaped[b] += leaving * fate[2 * side] as f64;
@@ -314,6 +318,8 @@ fn add_leaf(st: &State, ws: &[u8], e: Elem, fate: &[f32], out: &mut Balance) {
     if State::sides(e) == 1 {
         for b in 0..nb {
             let d = seen * fate[4 + b] as f64;
+            // Light of other surfaces through links on it, absorbed there too.
+            out.absorbed_backs[b] += seen * fate[4 + nb + b] as f64;
             out.direct[b] += d;
             out.absorbed_backs[b] += d;
         }
@@ -406,13 +412,14 @@ fn fates<V: Visibility + ?Sized>(
             p.poly,
             rays,
             vis,
-            &mut out[4..4 + nb],
+            &mut out[4..4 + 2 * nb],
         );
     }
 }
 
-/// Direct irradiance of suns and sky on the back of a one-sided patch (W/m^2 per band), from
-/// `rays` stratified points per source that faces it.
+/// Direct irradiance on the back of a one-sided patch (W/m^2 per band), from `rays`
+/// stratified points per source that faces it: into `out[..bands]` the suns' and sky's,
+/// into `out[bands..]` the beams' that came through links of the levels around.
 #[allow(clippy::too_many_arguments)]
 fn back_direct<V: Visibility + ?Sized>(
     st: &State,
@@ -447,7 +454,10 @@ fn back_direct<V: Visibility + ?Sized>(
         }
         lit /= (grid * grid) as f32;
         let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
-        for (o, v) in out.iter_mut().zip(irr) {
+        // The suns' and sky's first, then what came through links (see `add_leaf`).
+        let nb = irr.len().min(out.len() / 2);
+        let part = if src.outer == NONE { 0 } else { nb };
+        for (o, v) in out[part..part + nb].iter_mut().zip(irr) {
             *o += v * c * lit;
         }
     }
