@@ -210,7 +210,11 @@ pub(crate) fn light_along(
                 // first scattering is read, see `shows_polygons`.)
                 let v = match &own {
                     Some((r, side)) => {
-                        r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band)
+                        let shape: f32 = super::pool::read(
+                            ws,
+                            profile_at(st, i, height_bin(st, ws, i, q), band),
+                        );
+                        r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band) * shape
                     }
                     _ => noted(i, band),
                 };
@@ -231,7 +235,83 @@ const RADIANCE_GRID: crate::tables::grid::DirectionGrid =
 
 /// Bytes of the noted radiance of `n` closed instances (see [`note_radiance`]).
 pub(crate) fn radiance_bytes(n: u32, bands: usize) -> usize {
-    n as usize * RADIANCE_GRID.cells() as usize * bands * 4
+    n as usize * (RADIANCE_GRID.cells() as usize + HEIGHT_BINS) * bands * 4
+}
+
+/// Slices of a closed instance's height (its original's box, along the original's z) by
+/// which the light it scattered more than once is shaped (see [`note_profile`]).
+const HEIGHT_BINS: usize = 8;
+
+/// Where closed instance `i`'s factor for height slice `bin` in band `band` lies.
+fn profile_at(st: &State, i: u32, bin: usize, band: usize) -> usize {
+    let cells = RADIANCE_GRID.cells() as usize;
+    st.lay.radiance
+        + 4 * (st.instances as usize * cells * st.bands
+            + (i as usize * HEIGHT_BINS + bin) * st.bands
+            + band)
+}
+
+/// The height slice of polygon `q` of closed instance `i` (see [`HEIGHT_BINS`]).
+fn height_bin(st: &State, ws: &[u8], i: u32, q: u32) -> usize {
+    let leaf = st.instance(ws, i);
+    let r = st.slot(ws, leaf.slot).record;
+    let Some(g) = st.original_geometry(ws, leaf.slot) else {
+        return 0;
+    };
+    let Some((p, _)) = g.point_on(q, 0.5, 0.5) else {
+        return 0;
+    };
+    let (lo, hi) = (r.lo[2], r.hi[2]);
+    let f = if hi > lo { (p.z - lo) / (hi - lo) } else { 0.0 };
+    ((f * HEIGHT_BINS as f32) as usize).min(HEIGHT_BINS - 1)
+}
+
+/// Notes closed instance `i`'s factors by height slice: the mean direct irradiance of suns
+/// and sky on its polygons in each slice (both sides), over that of all its polygons (1
+/// where unknown). The tables give the light scattered more than once as a mean over the
+/// whole instance, as it was measured alone; among neighbours the light around it fades
+/// downwards as the direct light does (the soil under a dense maize canopy read 19% too
+/// much NIR from the plants' lower leaves without this).
+fn note_profile(st: &State, ws: &mut [u8], i: u32) {
+    let nb = st.bands;
+    let mut f = [[1.0f32; crate::limits::MAX_BANDS]; HEIGHT_BINS];
+    if shows_polygons(st, ws, i) {
+        let placed = st.placed(ws, i);
+        let (d0, n) = st.received_at(ws, i, 0);
+        let direct = super::pool::floats(ws, d0, n);
+        if let (Ok(direct), Some(single)) = (
+            crate::tables::closed::Received::over(&placed, direct),
+            placed.tables().single(),
+        ) {
+            let mut sum = [[0.0f64; crate::limits::MAX_BANDS]; HEIGHT_BINS];
+            let mut area = [0.0f64; HEIGHT_BINS];
+            let (mut total, mut total_area) = ([0.0f64; crate::limits::MAX_BANDS], 0.0f64);
+            for q in 0..single.polygons() {
+                let a = single.polygon(q, 0).1 as f64;
+                let h = height_bin(st, ws, i, q as u32);
+                area[h] += a;
+                total_area += a;
+                for band in 0..nb {
+                    let e =
+                        direct.first_irradiance(q, 0, band) + direct.first_irradiance(q, 1, band);
+                    sum[h][band] += a * e.max(0.0) as f64;
+                    total[band] += a * e.max(0.0) as f64;
+                }
+            }
+            for h in 0..HEIGHT_BINS {
+                for band in 0..nb {
+                    if area[h] > 0.0 && total[band] > 0.0 && total_area > 0.0 {
+                        f[h][band] = ((sum[h][band] / area[h]) / (total[band] / total_area)) as f32;
+                    }
+                }
+            }
+        }
+    }
+    for (h, x) in f.iter().enumerate() {
+        for (band, v) in x.iter().enumerate().take(nb) {
+            super::pool::write(ws, profile_at(st, i, h, band), v);
+        }
+    }
 }
 
 /// Where closed instance `i`'s noted radiance in cell `cell` and band `band` lies.
@@ -263,6 +343,7 @@ fn shows_polygons(st: &State, ws: &[u8], i: u32) -> bool {
 /// every ray was four fifths of a canopy's gather.
 pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
+        note_profile(st, ws, i);
         let part = usize::from(shows_polygons(st, ws, i));
         for cell in 0..RADIANCE_GRID.cells() {
             let o = RADIANCE_GRID.direction(cell);
