@@ -186,52 +186,37 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
         v["peak_workspace_bytes"].as_u64().unwrap(),
         "{levels}"
     );
+    // The results table of `hirad solve SCENE ARGS --results OUT`, which must succeed.
+    let results_of = |scene: &std::path::Path, args: &[&str], out: &std::path::Path| {
+        let mut all = vec!["solve", s(scene)];
+        all.extend_from_slice(args);
+        all.extend(["--results", s(out), "-q"]);
+        let run = hirad(&all);
+        assert!(
+            run.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        std::fs::read(out).unwrap()
+    };
     // Any thread count gives the same bytes (the levels and their chunks are handed out in
     // a fixed order).
+    let hi_bytes = std::fs::read(&hi).unwrap();
     for threads in ["1", "2", "3"] {
         let other = dir.path().join(format!("hi_{threads}.csv"));
-        let out = hirad(&[
-            "solve",
-            s(&image),
-            "--method",
-            "hi",
-            "--threads",
-            threads,
-            "--results",
-            s(&other),
-            "-q",
-        ]);
+        let args = ["--method", "hi", "--threads", threads];
         assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert!(
-            std::fs::read(&other).unwrap() == std::fs::read(&hi).unwrap(),
+            results_of(&image, &args, &other) == hi_bytes,
             "--threads {threads} changed the results"
         );
     }
     // Every instance expanded is hr: the same bytes, and no tables needed.
+    let hr_bytes = std::fs::read(&hr).unwrap();
     for scene in [&image, &plant] {
         let none = dir.path().join("none.csv");
-        let out = hirad(&[
-            "solve",
-            s(scene),
-            "--method",
-            "hi",
-            "--instancing",
-            "none",
-            "--results",
-            s(&none),
-            "-q",
-        ]);
+        let args = ["--method", "hi", "--instancing", "none"];
         assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        assert!(
-            std::fs::read(&none).unwrap() == std::fs::read(&hr).unwrap(),
+            results_of(scene, &args, &none) == hr_bytes,
             "--instancing none differs from --method hr on {}",
             scene.display()
         );

@@ -205,15 +205,14 @@ pub(crate) fn light_along(
                     let side = usize::from(n.dot(placed.local(-d)) < 0.0);
                     Some((r, side))
                 });
+            // The met polygon's height slice, once for every band.
+            let bin = own.as_ref().map_or(0, |_| height_bin(st, ws, i, q));
             for (band, o) in out.iter_mut().enumerate() {
                 // (`noted` is the light scattered more than once where the polygon's own
-                // first scattering is read, see `shows_polygons`.)
+                // first scattering is read, see `shows_polygons`, shaped by its height.)
                 let v = match &own {
                     Some((r, side)) => {
-                        let shape: f32 = super::pool::read(
-                            ws,
-                            profile_at(st, i, height_bin(st, ws, i, q), band),
-                        );
+                        let shape: f32 = super::pool::read(ws, profile_at(st, i, bin, band));
                         r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band) * shape
                     }
                     _ => noted(i, band),
@@ -337,8 +336,9 @@ fn shows_polygons(st: &State, ws: &[u8], i: u32) -> bool {
 /// band) its contents show an observer in each cell's direction: its tables' intensity
 /// that way over its cross-section, from the light it holds now; for one whose rays meet
 /// its polygons (see [`shows_polygons`]) only that of its light scattered more than once
-/// (its intensity less the first scattering's), which is added to the first scattering of
-/// the one polygon a ray meets. Gather rays read it (see
+/// (its intensity less the first scattering's), which, times the factor of the met
+/// polygon's height slice (see [`note_profile`]), is added to the first scattering of the
+/// one polygon a ray meets. Gather rays read it (see
 /// [`light_along`]) once the level is solved: the tables' sum over all their cells for
 /// every ray was four fifths of a canopy's gather.
 pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {

@@ -6,6 +6,7 @@ mod flatten;
 mod info;
 mod progress;
 mod solve;
+mod solve_tables;
 mod tables;
 mod verdict;
 

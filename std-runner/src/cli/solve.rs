@@ -252,47 +252,7 @@ pub fn run(a: Args) -> Result<()> {
     let mut loaded = files::load_scene(&a.scene)?;
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let progress = Progress::new(a.quiet);
-    // Hierarchical instantiation needs every instanced original's tables: those the scene
-    // lacks come from the table cache, or are made now (and cached).
-    let mut tables_made = None;
-    if a.method == Method::Hi {
-        let missing = crate::tables::missing(&loaded.scene);
-        if !missing.is_empty() {
-            if !a.quiet {
-                let names: Vec<&str> = missing
-                    .iter()
-                    .map(|&o| loaded.scene.originals[o].name.as_str())
-                    .collect();
-                eprintln!(
-                    "note: {} has no directional tables for {}: taking them from the table cache or making them now (minutes per original at the defaults; `hirad tables SCENE -o OUT.hirb` keeps them in a file)",
-                    a.scene.display(),
-                    names.join(", ")
-                );
-            }
-            let made = crate::tables::complete(
-                &mut loaded.scene,
-                threads,
-                a.table_max_side,
-                &mut |what: &str, done: u64, total: u64| progress.phase_at(what, Some(total), done),
-            )
-            .with_context(|| format!("{}: making its directional tables", a.scene.display()))?;
-            progress.finish();
-            if !a.quiet && !made.unmet.is_empty() {
-                eprintln!(
-                    "warning: the tables of {} missed their error targets on the finest grids allowed{}; the solve goes on with them",
-                    made.unmet.join(", "),
-                    if a.table_max_side.is_some() {
-                        " (--table-max-side)"
-                    } else {
-                        ""
-                    }
-                );
-            }
-            tables_made = Some(made);
-        }
-    } else if a.table_max_side.is_some() && !a.quiet {
-        eprintln!("warning: --table-max-side has no effect without --method hi");
-    }
+    let tables_made = super::solve_tables::complete(&a, &mut loaded.scene, threads, &progress)?;
     let up = a.up.unwrap_or(loaded.up);
     let bytes = files::compile(&a.scene, &loaded.scene)?;
     let info = *crate::scene::read_image(&bytes)
