@@ -569,3 +569,73 @@ fn closed_instances_block_with_their_own_polygons() {
     )
     .unwrap();
 }
+
+/// Visible fractions finer than the workspace keeps come back averaged over the fine cells
+/// each coarse cell covers (rounded), the rest of the tables equal to the image's.
+#[test]
+fn fine_visible_fractions_load_averaged_onto_a_coarser_grid() {
+    // Sides kept (32 and less), halved twice (128), thrice (256) and from an uneven side
+    // (96: 48, then 24).
+    for (fine, coarse) in [(2u32, 2u32), (32, 32), (128, 32), (256, 32), (96, 24)] {
+        let (mut s, _) = scene(2);
+        let scatterers = 3u32;
+        let t = &mut s.tables[0];
+        let keep = t.values.len() - t.record.lengths()[4] as usize;
+        t.record.scatterers = scatterers;
+        t.record.single_side = fine;
+        let stride = hirad_core::tables::single::shape_stride(2);
+        let shapes: Vec<f32> = (0..scatterers)
+            .flat_map(|p| {
+                let mut v = vec![0.0, 0.6, 0.8, 0.01 * (1 + p) as f32];
+                v.extend([0.1, 0.2, 0.3, 0.1, 0.2, 0.3]);
+                v
+            })
+            .collect();
+        assert_eq!(shapes.len(), scatterers as usize * stride);
+        t.values.truncate(keep);
+        t.values.extend(shapes);
+        // A fraction that varies within every coarse cell, by cell and polygon.
+        let frac = |cell: u32, p: u32| ((cell * 37 + p * 101 + (cell / fine) * 11) % 256) as u8;
+        t.visible = (0..fine * fine)
+            .flat_map(|c| (0..scatterers).map(move |p| frac(c, p)))
+            .collect();
+        let bytes = compile(&s).unwrap();
+        let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+        let mut ws = vec![0u8; 64 << 20];
+        let mut checked = 0;
+        load_level(
+            &view,
+            &Settings::default(),
+            Instancing::Top,
+            &mut ws,
+            |level| {
+                for i in 0..level.instances() {
+                    let c = level.instance(i);
+                    let Some(single) = c.placed.tables().single() else {
+                        continue;
+                    };
+                    assert_eq!(single.grid().side(), coarse, "from {fine}");
+                    let f = fine / coarse;
+                    for cell in 0..coarse * coarse {
+                        let (ci, cj) = (cell % coarse, cell / coarse);
+                        for p in 0..scatterers {
+                            let mut sum = 0u32;
+                            for dj in 0..f {
+                                for di in 0..f {
+                                    let fc = (cj * f + dj) * fine + ci * f + di;
+                                    sum += u32::from(frac(fc, p));
+                                }
+                            }
+                            let want = ((sum + f * f / 2) / (f * f)) as u8;
+                            let got = single.visible()[(cell * scatterers + p) as usize];
+                            assert_eq!(got, want, "from {fine}: cell {cell} polygon {p}");
+                        }
+                    }
+                    checked += 1;
+                }
+            },
+        )
+        .unwrap();
+        assert!(checked > 0);
+    }
+}

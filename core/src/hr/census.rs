@@ -195,7 +195,7 @@ pub(crate) fn census_at<S: SceneSource>(
             .ok_or(HrError::SceneTooLarge)?;
         c.table_bytes = c
             .table_bytes
-            .checked_add(t.visible_bytes())
+            .checked_add(super::load_instances::as_loaded(&t).visible_bytes())
             .ok_or(HrError::SceneTooLarge)?;
         if let Some(n) = super::original_geometry::blocking_polygons(view, k, blocking_polygons)? {
             c.blocking_bytes = c
