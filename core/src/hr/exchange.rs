@@ -63,20 +63,24 @@ const _: () = assert!(
 
 /// Byte offsets of the parts of the region for `n` instances and `bands` bands: heads,
 /// entries, per instance and cell its escaping rays (their mean direction and how many,
-/// 4 floats), received power, end.
-fn parts(n: u32, bands: usize) -> [usize; 5] {
+/// 4 floats), received power, per instance and cell the power its escaping rays stand for
+/// at the last gather (see [`escaping`]), per instance its mean radiosity before the last
+/// gather, end.
+fn parts(n: u32, bands: usize) -> [usize; 7] {
     let n = n as usize;
     let heads = 0;
     let entries = heads + up(4 * (n + 1));
     let cells = entries + up(ENTRY_BYTES * n * RAYS as usize);
     let power = cells + up(16 * n * CELLS);
-    let end = power + up(4 * n * CELLS * bands);
-    [heads, entries, cells, power, end]
+    let sent = power + up(4 * n * CELLS * bands);
+    let before = sent + up(4 * n * CELLS * bands);
+    let end = before + up(4 * n);
+    [heads, entries, cells, power, sent, before, end]
 }
 
 /// Bytes of the region for `n` closed instances (0 without any).
 pub(crate) fn bytes_needed(n: u32, bands: usize) -> usize {
-    if n == 0 { 0 } else { parts(n, bands)[4] }
+    if n == 0 { 0 } else { parts(n, bands)[6] }
 }
 
 /// Bytes of the region written: everything but the entries never reached (0 without
@@ -88,7 +92,7 @@ pub(crate) fn bytes_written(st: &State, ws: &[u8]) -> usize {
     }
     let p = parts(n, st.bands);
     let written: u32 = super::pool::read(ws, st.lay.exchange + p[0] + 4 * n as usize);
-    p[4] - (p[2] - p[1]) + ENTRY_BYTES * written as usize
+    p[6] - (p[2] - p[1]) + ENTRY_BYTES * written as usize
 }
 
 /// True when closed instance `i` sends its light to the others through the exchange (it
@@ -301,10 +305,9 @@ fn power_at(st: &State, i: u32, cell: usize) -> usize {
 }
 
 /// Hands every closed instance's escaping light to the instances it reaches (see the
-/// module documentation), from the light they hold now: fills the received power of every
-/// instance by cell, and, on instances whose tables keep their polygons apart, the light on
-/// the polygons the rays met (part 2 of their received light), which [`receive`] then adds
-/// to their light.
+/// module documentation), from the light they hold now: notes what each one's escaping rays
+/// stand for (for [`land`]) and fills the received power of every instance by cell, which
+/// [`receive`] then adds to its light.
 pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     let n = st.instances;
     if n == 0 {
@@ -313,11 +316,7 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     let nb = st.bands;
     let p = parts(n, nb);
     let base = st.lay.exchange;
-    ws[base + p[3]..base + p[4]].fill(0);
-    for i in 0..n {
-        let (at, len) = st.exchange_received_at(ws, i);
-        ws[at..at + 4 * len].fill(0);
-    }
+    ws[base + p[3]..base + p[5]].fill(0);
     let grid = grid();
     let mut opposite = [0u32; CELLS];
     for (c, o) in opposite.iter_mut().enumerate() {
@@ -332,54 +331,123 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
         let Some(sent) = escaping(st, ws, j, &p) else {
             continue;
         };
+        for (cell, v) in sent.iter().enumerate() {
+            let at = sent_at(&p, base, j, cell, nb);
+            super::pool::floats_mut(ws, at, nb).copy_from_slice(&v[..nb]);
+        }
         for e in first..last {
-            let at = base + p[1] + ENTRY_BYTES * e as usize;
-            let key: u32 = super::pool::read(ws, at);
-            let word: u32 = super::pool::read(ws, at + 4);
-            let on = match word & NOWHERE {
-                NOWHERE => NONE,
-                x => x,
-            };
-            let cell = (key & 63) as usize;
-            let to = key >> 6;
-            if to >= n {
+            let Some((to, cell, _, power)) = entry(st, ws, &p, j, e, &sent) else {
                 continue;
-            }
-            // The share of the cell's escaping rays that land there.
-            let escaped = cell_rays(st, ws, j, cell, &p);
-            let share = if escaped > 0.0 {
-                (word >> AT_BITS) as f32 / escaped
-            } else {
-                0.0
             };
-            let mut power = [0.0f32; MAX_BANDS];
-            for (band, x) in power.iter_mut().enumerate().take(nb) {
-                *x = sent[cell][band] * share;
-            }
             let acc: &mut [f32] =
                 super::pool::floats_mut(ws, power_at(st, to, opposite[cell] as usize), nb);
             for (a, x) in acc.iter_mut().zip(&power) {
                 *a += x;
             }
-            // Where it lands: the polygon met, as irradiance on its side.
-            if on != NONE && keeps_polygons(st, ws, to) {
-                let (q, side) = ((on >> 1) as usize, (on & 1) as usize);
-                let leaf = st.instance(ws, to);
-                let (at, len) = st.exchange_received_at(ws, to);
-                let area = match st.placed(ws, to).tables().single() {
-                    Some(single) if q < single.polygons() => {
-                        single.polygon(q, 0).1 * leaf.scale * leaf.scale
-                    }
-                    _ => 0.0,
+        }
+    }
+}
+
+/// Where closed instance `j`'s escaping power in cell `cell` lies (see [`parts`]).
+fn sent_at(p: &[usize; 7], base: usize, j: u32, cell: usize, bands: usize) -> usize {
+    base + p[4] + 4 * ((j as usize * CELLS + cell) * bands)
+}
+
+/// Entry `e` of emitter `j` whose escaping power per cell is `sent`: its receiver, the cell
+/// of the light's direction of travel, where it lands (polygon << 1 | side, or `NONE`) and
+/// the power it carries (W per band). `None` for an entry of no receiver.
+fn entry(
+    st: &State,
+    ws: &[u8],
+    p: &[usize; 7],
+    j: u32,
+    e: u32,
+    sent: &[[f32; MAX_BANDS]; CELLS],
+) -> Option<(u32, usize, u32, [f32; MAX_BANDS])> {
+    let at = st.lay.exchange + p[1] + ENTRY_BYTES * e as usize;
+    let key: u32 = super::pool::read(ws, at);
+    let word: u32 = super::pool::read(ws, at + 4);
+    let on = match word & NOWHERE {
+        NOWHERE => NONE,
+        x => x,
+    };
+    let cell = (key & 63) as usize;
+    let to = key >> 6;
+    if to >= st.instances {
+        return None;
+    }
+    // The share of the cell's escaping rays that land there.
+    let escaped = cell_rays(st, ws, j, cell, p);
+    let share = if escaped > 0.0 {
+        (word >> AT_BITS) as f32 / escaped
+    } else {
+        0.0
+    };
+    let mut power = [0.0f32; MAX_BANDS];
+    for (band, x) in power.iter_mut().enumerate().take(st.bands) {
+        *x = sent[cell][band] * share;
+    }
+    Some((to, cell, on, power))
+}
+
+/// Adds to the whole light (part 1) of every closed instance whose tables keep its
+/// polygons apart the light the last [`gather`]'s rays brought to the polygons they met, as
+/// irradiance on the side met: their first scattering then starts where the light landed,
+/// not from beams (a neighbour's light reaches leaves inside the neighbour's box, which light
+/// from beyond the box would not). Straight into the whole light, after every instance's
+/// was started again from its direct light (see `instance_light::gather_instances`), so
+/// that nothing per polygon is kept apart for it.
+pub(crate) fn land(st: &State, ws: &mut [u8]) {
+    let n = st.instances;
+    if n == 0 {
+        return;
+    }
+    let nb = st.bands;
+    let p = parts(n, nb);
+    let base = st.lay.exchange;
+    for j in 0..n {
+        let first: u32 = super::pool::read(ws, base + p[0] + 4 * j as usize);
+        let last: u32 = super::pool::read(ws, base + p[0] + 4 * (j as usize + 1));
+        if first >= last {
+            continue;
+        }
+        let mut sent = [[0.0f32; MAX_BANDS]; CELLS];
+        for (cell, v) in sent.iter_mut().enumerate() {
+            v[..nb].copy_from_slice(super::pool::floats(ws, sent_at(&p, base, j, cell, nb), nb));
+        }
+        for e in first..last {
+            let Some((to, _, on, power)) = entry(st, ws, &p, j, e, &sent) else {
+                continue;
+            };
+            if on == NONE || !keeps_polygons(st, ws, to) {
+                continue;
+            }
+            let (q, side) = ((on >> 1) as usize, (on & 1) as usize);
+            let leaf = st.instance(ws, to);
+            let (at, len) = st.received_at(ws, to, 1);
+            let (area, start) = {
+                let placed = st.placed(ws, to);
+                let Ok(r) = crate::tables::closed::Received::over(
+                    &placed,
+                    super::pool::floats(ws, at, len),
+                ) else {
+                    continue;
                 };
-                if area > 0.0 {
-                    let first = (q * 2 + side) * nb;
-                    let v = super::pool::floats_mut(ws, at, len);
-                    for (band, x) in power.iter().enumerate().take(nb) {
-                        let e = x / area;
-                        if e.is_finite() {
-                            v[first + band] += e;
-                        }
+                match placed.tables().single() {
+                    Some(single) if q < single.polygons() => (
+                        single.polygon(q, 0).1 * leaf.scale * leaf.scale,
+                        r.first_range().start,
+                    ),
+                    _ => (0.0, 0),
+                }
+            };
+            if area > 0.0 {
+                let v = super::pool::floats_mut(ws, at, len);
+                let first = start + (q * 2 + side) * nb;
+                for (band, x) in power.iter().enumerate().take(nb) {
+                    let e = x / area;
+                    if e.is_finite() {
+                        v[first + band] += e;
                     }
                 }
             }
@@ -387,8 +455,21 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     }
 }
 
+/// Closed instance `i`'s mean radiosity before the last gather (see
+/// `instance_light::gather_instances`), kept here and read back.
+pub(crate) fn set_before(st: &State, ws: &mut [u8], i: u32, v: f32) {
+    let p = parts(st.instances, st.bands);
+    super::pool::write(ws, st.lay.exchange + p[5] + 4 * i as usize, &v);
+}
+
+/// What [`set_before`] kept for closed instance `i`.
+pub(crate) fn before(st: &State, ws: &[u8], i: u32) -> f32 {
+    let p = parts(st.instances, st.bands);
+    super::pool::read(ws, st.lay.exchange + p[5] + 4 * i as usize)
+}
+
 /// Closed instance `j`'s escaping rays in cell `cell` (see [`build`]).
-fn cell_rays(st: &State, ws: &[u8], j: u32, cell: usize, p: &[usize; 5]) -> f32 {
+fn cell_rays(st: &State, ws: &[u8], j: u32, cell: usize, p: &[usize; 7]) -> f32 {
     let v: [f32; 4] = super::pool::read(
         ws,
         st.lay.exchange + p[2] + 16 * (j as usize * CELLS + cell),
@@ -407,7 +488,7 @@ fn keeps_polygons(st: &State, ws: &[u8], i: u32) -> bool {
 /// etendue of as many rays drawn over its sides' area (each ray pi A / RAYS). The cell's
 /// solid angle times the intensity at its centre lost the light of cells across a flat
 /// emitter's horizon. `None` without polygons of its own.
-fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 5]) -> Option<[[f32; MAX_BANDS]; CELLS]> {
+fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 7]) -> Option<[[f32; MAX_BANDS]; CELLS]> {
     let nb = st.bands;
     let base = st.lay.exchange;
     let placed = st.placed(ws, j);
@@ -439,9 +520,8 @@ fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 5]) -> Option<[[f32; MAX_
 
 /// Adds to part `part` of closed instance `i`'s received light what the last [`gather`]
 /// handed it, beam by beam (each cell's power over its cross-section that way); where its
-/// tables keep its polygons apart, their first scattering from where the rays landed, not
-/// from the beams (a neighbour's light reaches its leaves inside the neighbour's box, which
-/// light from beyond the box would not).
+/// tables keep its polygons apart, without their first scattering, which [`land`] adds
+/// from where the rays landed.
 pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
     let nb = st.bands;
     let grid = grid();
@@ -467,27 +547,6 @@ pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
                 }
             }
         });
-    }
-    if landed {
-        let (from, len) = st.exchange_received_at(ws, i);
-        let (to, n) = st.received_at(ws, i, part);
-        let range = {
-            let placed = st.placed(ws, i);
-            match crate::tables::closed::Received::over(&placed, super::pool::floats(ws, to, n)) {
-                Ok(r) => r.first_range(),
-                Err(_) => return,
-            }
-        };
-        if range.len() != len {
-            return;
-        }
-        for (k, at) in range.enumerate() {
-            let v: f32 = super::pool::read(ws, from + 4 * k);
-            if v != 0.0 {
-                let w: f32 = super::pool::read(ws, to + 4 * at);
-                super::pool::write(ws, to + 4 * at, &(w + v));
-            }
-        }
     }
 }
 

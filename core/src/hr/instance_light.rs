@@ -216,6 +216,9 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
     super::exchange::gather(st, ws);
     for i in 0..st.instances {
         let before = super::instance_kernel::mean_radiosity(st, ws, i);
+        super::exchange::set_before(st, ws, i, before);
+    }
+    for i in 0..st.instances {
         start_one(st, ws, i);
         let at = super::instance_kernel::centre_of(st, ws, i);
         let mut cur = st.links_head(ws, Elem::new(Kind::Instance, i));
@@ -238,8 +241,13 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
             cur = l.next;
         }
         super::exchange::receive(st, ws, i, 1);
+    }
+    // Their first scattering where the exchange's rays landed, once every instance's light
+    // started again (it goes straight into their whole light).
+    super::exchange::land(st, ws);
+    for i in 0..st.instances {
         let after = super::instance_kernel::mean_radiosity(st, ws, i);
-        change = change.max((after - before).abs());
+        change = change.max((after - super::exchange::before(st, ws, i)).abs());
         largest = largest.max(after);
     }
     (change, largest)

@@ -95,15 +95,13 @@ pub(crate) struct State {
 
 /// Floats of a closed instance's received light, all its parts (see
 /// [`State::received_at`]), for tables of `bands` bands, `scatterers` polygons kept apart and
-/// `incoming_cells` incoming cells: the direct light and all the light in full, the
-/// exchange's light on the polygons alone.
+/// `incoming_cells` incoming cells: the direct light and all the light.
 pub(crate) const fn received_parts_floats(
     bands: usize,
     scatterers: usize,
     incoming_cells: usize,
 ) -> usize {
     2 * crate::tables::closed::received_floats(bands, scatterers, incoming_cells)
-        + 2 * bands * scatterers
 }
 
 /// Geometry of an element, as the evaluation needs it.
@@ -516,20 +514,6 @@ impl State {
         (
             self.lay.received + 4 * (leaf.received as usize + part * n),
             n,
-        )
-    }
-
-    /// Where the exchange's light on closed instance `i`'s polygons kept apart lies (see
-    /// `exchange`): the byte offset and length in floats of its irradiance per polygon,
-    /// side and band, in the order of [`crate::tables::closed::Received::first_range`].
-    pub(crate) fn exchange_received_at(&self, ws: &[u8], i: u32) -> (usize, usize) {
-        let leaf = self.instance(ws, i);
-        let placed = self.placed(ws, i);
-        let n = placed.received_len();
-        let polygons = placed.tables().single().map_or(0, |s| s.polygons());
-        (
-            self.lay.received + 4 * (leaf.received as usize + 2 * n),
-            2 * self.bands * polygons,
         )
     }
 
