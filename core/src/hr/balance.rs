@@ -217,16 +217,12 @@ fn add_instance<V: Visibility + ?Sized>(
     use crate::tables::closed::Received;
     let nb = st.bands;
     let placed = st.placed(ws, i);
-    let (d0, n) = st.received_at(ws, i, 0);
-    let direct = super::pool::floats(ws, d0, n);
-    let (Ok(direct), Ok(all)) = (
-        Received::over(&placed, direct),
-        Received::over(&placed, st.received(ws, i)),
-    ) else {
+    let Ok(all) = Received::over(&placed, st.received(ws, i)) else {
         return;
     };
     for b in 0..nb {
-        out.direct[b] += direct.intercepted(b) as f64;
+        // The intercepted power is the light's first value per band.
+        out.direct[b] += st.direct_value(ws, i, b) as f64;
         out.absorbed[b] += all.absorbed(b) as f64;
     }
     let seed = hash3(i, 0xBA1, 0x1A);

@@ -294,12 +294,15 @@ fn note_profile(st: &State, ws: &mut [u8], i: u32) {
     let mut f = [[1.0f32; crate::limits::MAX_BANDS]; HEIGHT_BINS];
     if shows_polygons(st, ws, i) {
         let placed = st.placed(ws, i);
-        let (d0, n) = st.received_at(ws, i, 0);
-        let direct = super::pool::floats(ws, d0, n);
-        if let (Ok(direct), Some(single)) = (
-            crate::tables::closed::Received::over(&placed, direct),
+        if let (Ok(all), Some(single)) = (
+            crate::tables::closed::Received::over(&placed, st.received(ws, i)),
             placed.tables().single(),
         ) {
+            // The direct light's values lie where the whole light's do.
+            let first = all.first_range().start;
+            let direct = |q: usize, side: usize, band: usize| {
+                st.direct_value(ws, i, first + (q * 2 + side) * nb + band)
+            };
             let mut sum = [[0.0f64; crate::limits::MAX_BANDS]; HEIGHT_BINS];
             let mut area = [0.0f64; HEIGHT_BINS];
             let (mut total, mut total_area) = ([0.0f64; crate::limits::MAX_BANDS], 0.0f64);
@@ -309,8 +312,7 @@ fn note_profile(st: &State, ws: &mut [u8], i: u32) {
                 area[h] += a;
                 total_area += a;
                 for band in 0..nb {
-                    let e =
-                        direct.first_irradiance(q, 0, band) + direct.first_irradiance(q, 1, band);
+                    let e = direct(q, 0, band) + direct(q, 1, band);
                     sum[h][band] += a * e.max(0.0) as f64;
                     total[band] += a * e.max(0.0) as f64;
                 }

@@ -424,7 +424,7 @@ pub(crate) fn land(st: &State, ws: &mut [u8]) {
             }
             let (q, side) = ((on >> 1) as usize, (on & 1) as usize);
             let leaf = st.instance(ws, to);
-            let (at, len) = st.received_at(ws, to, 1);
+            let (at, len) = st.received_at(ws, to);
             let (area, start) = {
                 let placed = st.placed(ws, to);
                 let Ok(r) = crate::tables::closed::Received::over(
@@ -518,11 +518,11 @@ fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 7]) -> Option<[[f32; MAX_
     Some(sent)
 }
 
-/// Adds to part `part` of closed instance `i`'s received light what the last [`gather`]
+/// Adds to closed instance `i`'s whole light what the last [`gather`]
 /// handed it, beam by beam (each cell's power over its cross-section that way); where its
 /// tables keep its polygons apart, without their first scattering, which [`land`] adds
 /// from where the rays landed.
-pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
+pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32) {
     let nb = st.bands;
     let grid = grid();
     let landed = keeps_polygons(st, ws, i);
@@ -534,7 +534,7 @@ pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32, part: usize) {
         }
         e[..nb].copy_from_slice(power);
         let d = grid.direction(cell as u32);
-        st.with_received(ws, i, part, |placed, r| {
+        st.with_received(ws, i, |placed, r| {
             let s = placed.shadow(d);
             if s > 0.0 {
                 for v in &mut e[..nb] {

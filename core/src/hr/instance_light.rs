@@ -127,8 +127,8 @@ struct Ctx<'a, 'v, V: ?Sized> {
     vis: &'a Vis<'v, V>,
 }
 
-/// Lights every closed instance by every source: clears and fills the direct part of its
-/// received light, and starts the whole light from it.
+/// Lights every closed instance by every source: clears its whole light, fills it with
+/// the suns' and sky's, and notes that as its direct light.
 pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
     st: &mut State,
     ws: &mut [u8],
@@ -138,7 +138,7 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
 ) {
     let (instances, sources) = (st.instances as usize, st.sources as usize);
     for i in 0..st.instances {
-        st.with_received(ws, i, 0, |_, r| r.clear());
+        st.with_received(ws, i, |_, r| r.clear());
     }
     let pairs = instances * sources;
     if pairs > 0 {
@@ -182,9 +182,7 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
                             *o = v * t;
                         }
                     }
-                    c.st.with_received(c.ws, i, 0, |placed, r| {
-                        r.receive(placed, towards, &e[..nb])
-                    });
+                    c.st.with_received(c.ws, i, |placed, r| r.receive(placed, towards, &e[..nb]));
                 }
             },
             &mut |done, total| {
@@ -193,13 +191,14 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
         );
     }
     super::polygon_light::light_polygons(st, ws, vis, ex, progress);
-    start_from_direct(st, ws);
+    note_direct(st, ws);
 }
 
-/// Sets every closed instance's whole light to its direct light (before links add theirs).
-pub(crate) fn start_from_direct(st: &State, ws: &mut [u8]) {
+/// Notes every closed instance's light, lit by suns and sky alone, as its direct light
+/// (what its whole light starts from again at every gather, before links add theirs).
+pub(crate) fn note_direct(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
-        start_one(st, ws, i);
+        st.note_direct(ws, i);
     }
 }
 
@@ -232,7 +231,7 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
                 for v in &mut s[..nb] {
                     *v /= m as f32;
                 }
-                st.with_received(ws, i, 1, |placed, r| {
+                st.with_received(ws, i, |placed, r| {
                     for &d in &dirs[..m] {
                         r.receive(placed, d, &s[..nb]);
                     }
@@ -240,7 +239,7 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
             }
             cur = l.next;
         }
-        super::exchange::receive(st, ws, i, 1);
+        super::exchange::receive(st, ws, i);
     }
     // Their first scattering where the exchange's rays landed, once every instance's light
     // started again (it goes straight into their whole light).
@@ -290,9 +289,7 @@ pub(crate) fn link_flux(st: &State, ws: &[u8], i: u32, at: Vec3, kk: usize, out:
 
 /// Sets closed instance `i`'s whole light to its direct light.
 fn start_one(st: &State, ws: &mut [u8], i: u32) {
-    let (a, n) = st.received_at(ws, i, 0);
-    let (b, _) = st.received_at(ws, i, 1);
-    ws.copy_within(a..a + 4 * n, b);
+    st.restart_from_direct(ws, i);
 }
 
 /// Most directions a link's light is spread over (see [`cone_directions`]).

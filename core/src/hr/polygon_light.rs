@@ -283,7 +283,7 @@ fn add_first<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32, first: u32, b: u32, f: &
         };
         let g = (k.min(st.suns)) as usize;
         let sum = &mut c.sums[k as usize];
-        st.with_received(ws, i, 0, |placed, r| {
+        st.with_received(ws, i, |placed, r| {
             let Some(single) = placed.tables().single() else {
                 return;
             };
@@ -334,7 +334,7 @@ fn add_whole<V: ?Sized>(c: &mut Ctx<'_, '_, V>, i: u32) {
         for v in &mut e[..nb] {
             *v *= t;
         }
-        st.with_received(ws, i, 0, |placed, r| {
+        st.with_received(ws, i, |placed, r| {
             r.receive_spread(placed, towards, &e[..nb])
         });
     }
