@@ -142,10 +142,16 @@ fn read(path: &Path) -> Result<Vec<u8>> {
 /// column (text) or byte offset (binary) of the fault.
 /// Errors are input errors (exit status 3, see [`crate::exit`]).
 pub fn load_scene(path: &Path) -> Result<Loaded> {
-    load(path).map_err(crate::exit::input)
+    load(path, true).map_err(crate::exit::input)
 }
 
-fn load(path: &Path) -> Result<Loaded> {
+/// [`load_scene`] keeping of a binary image's tables only their records (see
+/// `scene::decompile_records`): for a solve that reads the image itself.
+pub fn load_scene_records(path: &Path) -> Result<Loaded> {
+    load(path, false).map_err(crate::exit::input)
+}
+
+fn load(path: &Path, tables: bool) -> Result<Loaded> {
     let format = Format::of(path)?;
     not_a_directory(path)?;
     let mut warnings = Vec::new();
@@ -159,7 +165,12 @@ fn load(path: &Path) -> Result<Loaded> {
         }
         Format::Binary => {
             let view = open_image(path)?;
-            scene::decompile(&view).map_err(|e| anyhow!("{}: {e}", path.display()))?
+            let scene = if tables {
+                scene::decompile(&view)
+            } else {
+                scene::decompile_records(&view)
+            };
+            scene.map_err(|e| anyhow!("{}: {e}", path.display()))?
         }
         Format::Obj => {
             let bytes = read(path)?;

@@ -249,29 +249,43 @@ pub fn run(a: Args) -> Result<()> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     warn_unused(&a);
-    let mut loaded = files::load_scene(&a.scene)?;
+    // Hierarchical instantiation from a `.hirb` that holds every table it needs reads the
+    // file on demand: its tables go into the workspace once, and the model keeps only their
+    // records (a canopy's are 20 MB a copy: loading them twice over was the run's peak).
+    let binary_hi = a.method == Method::Hi
+        && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
+    let mut loaded = if binary_hi {
+        let lean = files::load_scene_records(&a.scene)?;
+        if crate::tables::missing(&lean.scene).is_empty() {
+            lean
+        } else {
+            files::load_scene(&a.scene)?
+        }
+    } else {
+        files::load_scene(&a.scene)?
+    };
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
     let progress = Progress::new(a.quiet);
     let tables_made = super::solve_tables::complete(&a, &mut loaded.scene, threads, &progress)?;
     let up = a.up.unwrap_or(loaded.up);
-    let bytes = files::compile(&a.scene, &loaded.scene)?;
-    let info = *crate::scene::read_image(&bytes)
-        .map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?
-        .info();
-    // Hierarchical instantiation from a `.hirb` reads the file on demand: its tables go
-    // into the workspace once, and the model keeps none (a canopy's are 20 MB a copy).
-    let image = if a.method == Method::Hi
-        && loaded.format == files::Format::Binary
-        && tables_made.is_none()
-    {
-        let view = files::open_image(&a.scene)?;
-        loaded.scene.tables = Vec::new();
-        Some(view)
+    let image = if binary_hi && tables_made.is_none() {
+        Some(files::open_image(&a.scene)?)
     } else {
         None
     };
+    let info = match &image {
+        Some(view) => {
+            loaded.scene.tables = Vec::new();
+            *view.info()
+        }
+        None => {
+            let bytes = files::compile(&a.scene, &loaded.scene)?;
+            *crate::scene::read_image(&bytes)
+                .map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?
+                .info()
+        }
+    };
     let scene = &loaded.scene;
-    drop(bytes);
     if info.expanded_polygons == 0 {
         if loaded.skipped_faces > 0 {
             return Err(input(anyhow!(

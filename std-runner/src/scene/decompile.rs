@@ -29,6 +29,17 @@ fn sid(raw: u32) -> Option<StringId> {
 /// `material_N` / `original_N`; repeated names get a `_N` suffix so that the text form
 /// stays unambiguous.
 pub fn decompile<S: SceneSource>(v: &SceneView<S>) -> Result<Scene, ImageError> {
+    decompile_with(v, true)
+}
+
+/// [`decompile`] keeping of each original's tables only its record (values and visible
+/// fractions left empty): what says which originals have tables, without copying them (a
+/// canopy's are 20 MB). Such a model does not compile again; the image is read instead.
+pub fn decompile_records<S: SceneSource>(v: &SceneView<S>) -> Result<Scene, ImageError> {
+    decompile_with(v, false)
+}
+
+fn decompile_with<S: SceneSource>(v: &SceneView<S>, contents: bool) -> Result<Scene, ImageError> {
     let info = *v.info();
     let mut scene = Scene::new(info.bands as u8);
     for b in 0..info.bands {
@@ -73,10 +84,13 @@ pub fn decompile<S: SceneSource>(v: &SceneView<S>) -> Result<Scene, ImageError> 
     }
     for i in 0..info.tables {
         let record = v.table(i)?;
-        let mut values = vec![0.0f32; record.values() as usize];
-        v.table_values(record.first, &mut values)?;
-        let mut visible = vec![0u8; record.visible_bytes() as usize];
-        v.table_visibility(record.first_visible, &mut visible)?;
+        let (mut values, mut visible) = (Vec::new(), Vec::new());
+        if contents {
+            values = vec![0.0f32; record.values() as usize];
+            v.table_values(record.first, &mut values)?;
+            visible = vec![0u8; record.visible_bytes() as usize];
+            v.table_visibility(record.first_visible, &mut visible)?;
+        }
         scene.tables.push(super::Tables {
             original: record.original as usize,
             record,

@@ -16,7 +16,7 @@ mod up;
 
 pub use check::SceneError;
 pub use compile::compile;
-pub use decompile::{decompile, read_image};
+pub use decompile::{decompile, decompile_records, read_image};
 pub use expand::{ExpandVisitor, ExpandedNode, expand};
 pub use sample::sample;
 pub use small::{too_small_detail, too_small_message};
