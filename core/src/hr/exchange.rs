@@ -323,8 +323,7 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
         *o = grid.cell_of(-grid.direction(c as u32));
     }
     for j in 0..n {
-        let first: u32 = super::pool::read(ws, base + p[0] + 4 * j as usize);
-        let last: u32 = super::pool::read(ws, base + p[0] + 4 * (j as usize + 1));
+        let (first, last) = entries_of(ws, &p, base, j);
         if first >= last {
             continue;
         }
@@ -346,6 +345,12 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
             }
         }
     }
+}
+
+/// The range of emitter `j`'s entries (see [`parts`]).
+fn entries_of(ws: &[u8], p: &[usize; 7], base: usize, j: u32) -> (u32, u32) {
+    let at = base + p[0] + 4 * j as usize;
+    (super::pool::read(ws, at), super::pool::read(ws, at + 4))
 }
 
 /// Where closed instance `j`'s escaping power in cell `cell` lies (see [`parts`]).
@@ -406,8 +411,7 @@ pub(crate) fn land(st: &State, ws: &mut [u8]) {
     let p = parts(n, nb);
     let base = st.lay.exchange;
     for j in 0..n {
-        let first: u32 = super::pool::read(ws, base + p[0] + 4 * j as usize);
-        let last: u32 = super::pool::read(ws, base + p[0] + 4 * (j as usize + 1));
+        let (first, last) = entries_of(ws, &p, base, j);
         if first >= last {
             continue;
         }

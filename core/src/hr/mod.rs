@@ -48,6 +48,7 @@ mod pending;
 mod plan;
 mod polygon_light;
 mod pool;
+mod reach;
 mod records;
 mod refine;
 mod relight;
