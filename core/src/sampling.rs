@@ -188,6 +188,18 @@ pub fn point_in_front(
     Some(a + (b - a) * u + (c - a) * v)
 }
 
+/// Area (m^2) of the part of a convex triangle or quad in front of a plane (through
+/// `on_plane`, normal `normal`): the measure [`point_in_front`] draws its points by.
+pub fn area_in_front(corners: &[Vec3], on_plane: Vec3, normal: Vec3) -> f32 {
+    let mut clipped = [Vec3::ZERO; 5];
+    let k = clip_front(corners, on_plane, normal, &mut clipped);
+    if k < 3 {
+        0.0
+    } else {
+        polygon_area(&clipped[..k])
+    }
+}
+
 /// Area of a planar convex polygon (m^2).
 fn polygon_area(corners: &[Vec3]) -> f32 {
     let mut twice = Vec3::ZERO;

@@ -102,9 +102,13 @@ fn live_share(st: &State, ws: &[u8], e: Elem, side: usize) -> f32 {
     let mut h = [0.0f32; 8];
     super::closure::leaf_irradiance(st, ws, e, side, &mut h[..nb]);
     let d = st.direct(ws, e, side);
+    // The part of the direct light that came through the links of the levels around (an
+    // opened instance's level) is gathered again: it counts as the links' (counted as direct,
+    // the lamps around an opened chair left its polygons a thirteenth of hr's rays).
+    let linked = st.linked(ws, e, side);
     let mut share = 0.0f32;
     for k in 0..nb {
-        let dk = d.map_or(0.0, |d| d[k]);
+        let dk = d.map_or(0.0, |d| d[k]) - linked.map_or(0.0, |l| l[k]);
         let all = h[k].max(dk);
         if all > 0.0 {
             share = share.max((h[k] - dk).max(0.0) / all);

@@ -533,6 +533,9 @@ fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
         total.links += level.links;
         total.evaluations += level.evaluations;
         total.rays += level.rays;
+        total.rays_by_phase.lighting += level.rays_by_phase.lighting;
+        total.rays_by_phase.links += level.rays_by_phase.links;
+        total.rays_by_phase.final_gather += level.rays_by_phase.final_gather;
         total.iterations += level.iterations;
         total.budget_limited |= level.budget_limited;
         total.iteration_capped |= level.iteration_capped;

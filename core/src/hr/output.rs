@@ -4,7 +4,7 @@
 //! and its radiosity follows from its material.
 
 use super::exec::{Executor, Fallback, Progress, run_chunks};
-use super::final_gather::{Emitters, emitters, polygon as gather_polygon};
+use super::final_gather::{Emitters, emitters_through, polygon as gather_polygon};
 use super::gather_rays::rays_per_side;
 use super::ids::Elem;
 use super::layout::CHUNK;
@@ -79,7 +79,7 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
         st,
         ws,
         vis,
-        em: emitters(st, ws),
+        em: emitters_through(st, ws, vis),
         rays,
     };
     let per = 2 * nb + 1;

@@ -4,7 +4,7 @@
 //! and the passes go on until the light leaving the surfaces settles.
 
 use super::exec::{Executor, Fallback, Progress, run_chunks};
-use super::final_gather::{Emitters, emitters, leaf, leaf_grid, patch_corners};
+use super::final_gather::{Emitters, emitters_through, leaf, leaf_grid, patch_corners};
 use super::gather_rays::{adaptive_rays, gathered_share, polygon_rays, rays_per_side};
 use super::ids::{Elem, Kind};
 use super::layout::CHUNK;
@@ -159,7 +159,7 @@ fn relight<V: Visibility + ?Sized, E: Executor>(
     let rays = (full / 2).max(1);
     let nb = st.bands;
     let per = 1 + 2 * nb;
-    let em = emitters(st, ws);
+    let em = emitters_through(st, ws, vis);
     let mut cast = 0u64;
     // Both pools under one phase: the count runs on over them.
     let all = st.pool(Kind::Patch1).len as u64 + st.pool(Kind::Patch2).len as u64;

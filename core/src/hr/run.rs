@@ -112,7 +112,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             level.node,
             &mut ws[..need],
         )?;
-        if c.polygons() == 0 {
+        if c.polygons() == 0 && c.instances == 0 {
             return Err(HrError::Empty);
         }
         let internal = visibility.is_none();

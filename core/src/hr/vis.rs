@@ -49,6 +49,17 @@ fn depth_left(skip: [u32; 2]) -> Option<u32> {
         .map(|s| s & (DEPTH - 1))
 }
 
+impl<'a, V: ?Sized> Vis<'a, V> {
+    /// The level `k` levels out from this one (1: the one it is open in), if there is one.
+    pub(crate) fn outer_level(&self, k: u32) -> Option<&'a Outer<'a>> {
+        match self {
+            Vis::Nested(_, o) if k == 1 => Some(*o),
+            Vis::Nested(_, o) if k > 1 => o.vis.outer_level(k - 1),
+            _ => None,
+        }
+    }
+}
+
 impl Outer<'_> {
     fn ray(&self) -> Ray<'_, crate::visibility::Unoccluded> {
         Ray {
@@ -130,7 +141,17 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
     /// emission included), and the light of the outer levels' closed instances on the way
     /// (the opened one aside), nearest first; on through the next outer level if it meets
     /// no polygon. Nothing in a level not opened from another.
-    pub(crate) fn gather_beyond(&self, x: Vec3, d: Vec3, weight: f32, out: &mut [f32]) {
+    /// With `reflected`, a polygon met reads only what it reflects (its radiosity less its
+    /// emission): the outer levels' emitters are then added directly (see
+    /// `final_gather::Emitters`).
+    pub(crate) fn gather_beyond(
+        &self,
+        x: Vec3,
+        d: Vec3,
+        weight: f32,
+        reflected: bool,
+        out: &mut [f32],
+    ) {
         let Vis::Nested(_, outer) = self.vis else {
             return;
         };
@@ -158,14 +179,16 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
                 if side < State::sides(root) {
                     let at = super::final_gather::leaf_at(st, ws, root, y, n);
                     if let Some(b) = st.b(ws, at, side) {
-                        for (o, v) in out.iter_mut().zip(b) {
-                            *o += w * v.max(0.0);
+                        let emit = &st.material(ws, hp.material).emit[side];
+                        for (k, (o, v)) in out.iter_mut().zip(b).enumerate() {
+                            let e = if reflected { emit[k] } else { 0.0 };
+                            *o += w * (v - e).max(0.0);
                         }
                     }
                 }
             }
             Some(_) => {}
-            None => ray.gather_beyond(x, d, w, out),
+            None => ray.gather_beyond(x, d, w, reflected, out),
         }
     }
 }
