@@ -380,9 +380,12 @@ fn hierarchical_instantiation_gives_every_polygon_its_light() {
         100.0 * worst,
         100.0 * worst_plant
     );
-    assert!(median <= 0.015, "median {median}");
-    assert!(p90 <= 0.06, "90th percentile {p90}");
-    assert!(worst <= 0.15, "worst {worst}");
+    // Measured at a2765f8: 0.67%, 3.6%, 15.6% (a leaf of the interpenetrating plants; 14.3%
+    // on another leaf before an opened level's rays counted its binned links' light as
+    // gathered, with median 0.90% and 90th percentile 4.3%).
+    assert!(median <= 0.01, "median {median}");
+    assert!(p90 <= 0.05, "90th percentile {p90}");
+    assert!(worst <= 0.18, "worst {worst}");
 }
 
 /// Between the clusters that hold closed instances no link can carry light before they open
