@@ -9,7 +9,8 @@
 //! polygon whose side facing the point emits nothing). Unbiased: every polygon that can
 //! light the point has a positive probability.
 
-use super::final_gather::{Receiver, patch_corners};
+use super::emitters::Receiver;
+use super::final_gather::patch_corners;
 use super::ids::{Elem, Kind};
 use super::state::State;
 use crate::formfactor::{facing_side, point_polygon};

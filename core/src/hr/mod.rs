@@ -26,6 +26,7 @@ mod cone;
 mod correction_filter;
 mod direct;
 mod emitter_tree;
+mod emitters;
 mod error;
 mod eval;
 mod exchange;

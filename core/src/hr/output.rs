@@ -3,8 +3,9 @@
 //! final gather on, a polygon's irradiance is its own gathered light (see `final_gather`)
 //! and its radiosity follows from its material.
 
+use super::emitters::{Emitters, emitters_through};
 use super::exec::{Executor, Fallback, Progress, run_chunks};
-use super::final_gather::{Emitters, emitters_through, polygon as gather_polygon};
+use super::final_gather::polygon as gather_polygon;
 use super::gather_rays::rays_per_side;
 use super::ids::Elem;
 use super::layout::CHUNK;

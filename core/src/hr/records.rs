@@ -104,7 +104,7 @@ pub(crate) struct Cluster {
     /// pull: what a link from it may bring where its light is uneven (see `refine`).
     pub peak: f32,
     /// The power its polygons emit (W, both sides, the largest band): how the final gather
-    /// picks emitting polygons in scenes with many (see `final_gather::emitter_tree`).
+    /// picks emitting polygons in scenes with many (see `emitter_tree`).
     pub emitted: f32,
     /// Closed instances inside.
     pub instances: u32,

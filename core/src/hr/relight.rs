@@ -3,8 +3,9 @@
 //! the first pass hands what changed back to the hierarchy's links (a defect correction),
 //! and the passes go on until the light leaving the surfaces settles.
 
+use super::emitters::{Emitters, emitters_through};
 use super::exec::{Executor, Fallback, Progress, run_chunks};
-use super::final_gather::{Emitters, emitters_through, leaf, leaf_grid, patch_corners};
+use super::final_gather::{leaf, leaf_grid, patch_corners};
 use super::gather_rays::{adaptive_rays, gathered_share, polygon_rays, rays_per_side};
 use super::ids::{Elem, Kind};
 use super::layout::CHUNK;

@@ -143,7 +143,7 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
     /// no polygon. Nothing in a level not opened from another.
     /// With `reflected`, a polygon met reads only what it reflects (its radiosity less its
     /// emission): the outer levels' emitters are then added directly (see
-    /// `final_gather::Emitters`).
+    /// `emitters::Emitters`).
     pub(crate) fn gather_beyond(
         &self,
         x: Vec3,
