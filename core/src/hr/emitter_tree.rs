@@ -244,6 +244,11 @@ fn importance(st: &State, ws: &[u8], e: Elem, x: Vec3, n: Vec3, skip: u32) -> f6
         let cos = (n.dot(d) / libm::sqrtf(d2)).max(FLOOR);
         return (c.emitted * cos / d2) as f64;
     }
+    // A closed instance beside the emitters in a level of hierarchical instantiation:
+    // its contents emit nothing here (their light is in its tables).
+    if !matches!(e.kind(), Kind::Patch1 | Kind::Patch2) {
+        return 0.0;
+    }
     let p = st.patch(ws, e);
     if p.poly == skip {
         return 0.0;

@@ -36,9 +36,14 @@ pub(crate) struct Emitters {
     pub count: usize,
     pub direct: bool,
     pub tree: bool,
-    /// The outer levels' emitters are among `ids`: rays that go on through those levels
-    /// read only what the polygons they meet there reflect.
+    /// The outer levels' emitters are among `ids`, or drawn down the light cut of level
+    /// `outer_tree` out: rays that go on through those levels read only what the polygons
+    /// they meet there reflect.
     pub outer: bool,
+    /// With more than [`MAX_DIRECT_EMITTERS`] emitting polygons around a level that has
+    /// none, all in one level `outer_tree` levels out (0: none): each sample draws one down
+    /// that level's light cut, as a level with many of its own does.
+    pub outer_tree: u8,
 }
 
 impl Emitters {
@@ -50,7 +55,7 @@ impl Emitters {
 
 /// The state and workspace of the level `level` levels out from (`st`, `ws`), whose
 /// visibility is `vis` (0: that level itself).
-fn level_of<'a, V: ?Sized>(
+pub(super) fn level_of<'a, V: ?Sized>(
     st: &'a State,
     ws: &'a [u8],
     vis: &Vis<'a, V>,
@@ -71,22 +76,67 @@ pub(crate) fn emitters_through<V: ?Sized>(st: &State, ws: &[u8], vis: &Vis<'_, V
     }
     let mut out = own;
     out.outer = true;
+    // The levels around that emit: the first and whether another does too.
+    let (mut first, mut several) = (0u32, false);
     let mut k = 1u32;
     while let Some(o) = vis.outer_level(k) {
+        if k > u8::MAX as u32 {
+            return own;
+        }
         for i in 0..o.st.polygons {
             if !emits(o.st, o.ws, i) {
                 continue;
             }
-            if out.count == MAX_DIRECT_EMITTERS || k > u8::MAX as u32 {
-                return own;
+            if first == 0 {
+                first = k;
+            } else if first != k {
+                several = true;
             }
-            out.ids[out.count] = i;
-            out.levels[out.count] = k as u8;
+            if out.count < MAX_DIRECT_EMITTERS {
+                out.ids[out.count] = i;
+                out.levels[out.count] = k as u8;
+            }
             out.count += 1;
         }
         k += 1;
     }
-    out
+    if out.count <= MAX_DIRECT_EMITTERS {
+        return out;
+    }
+    if own.count > 0 || several {
+        // Too many, in several levels: the gather's rays read them (no light cut across
+        // levels).
+        return own;
+    }
+    Emitters {
+        ids: [NONE; MAX_DIRECT_EMITTERS],
+        levels: [0; MAX_DIRECT_EMITTERS],
+        count: 0,
+        direct: false,
+        tree: false,
+        outer: true,
+        outer_tree: first as u8,
+    }
+}
+
+/// Visibility from a point of a level to a point of an emitting polygon of a level around
+/// it: the ray stops just short of the emitter (a ten-thousandth of the way), which is no
+/// polygon of this level's to skip, and goes through every level around.
+pub(super) struct ToOuter<'r, 'a, V: ?Sized> {
+    pub ray: &'r Ray<'a, V>,
+    /// The receiving point's polygon (of this level).
+    pub poly: u32,
+}
+
+impl<V: Visibility + ?Sized> Visibility for ToOuter<'_, '_, V> {
+    fn transmittance(&self, from: Vec3, to: Vec3, _: [u32; 2]) -> f32 {
+        self.ray
+            .transmittance(from, to + (from - to) * 1e-4, [self.poly, NONE])
+    }
+
+    fn first_hit(&self, from: Vec3, to: Vec3, _: [u32; 2]) -> Option<(u32, f32)> {
+        self.ray.first_hit(from, to, [self.poly, NONE])
+    }
 }
 
 /// True when polygon `i` emits on either side in any band.
@@ -104,6 +154,7 @@ pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
         direct: true,
         tree: false,
         outer: false,
+        outer_tree: 0,
     };
     for i in 0..st.polygons {
         if emits(st, ws, i) {
@@ -303,9 +354,11 @@ pub(super) fn emitted_light<V: Visibility + ?Sized>(
     let t = if level == 0 {
         vis.transmittance(x, y, [leaf.poly, l])
     } else {
-        // An outer level's emitter is no polygon of this level's to skip: the ray stops
-        // just short of it (a ten-thousandth of the way), through every level around.
-        vis.transmittance(x, y + (x - y) * 1e-4, [leaf.poly, NONE])
+        let to = ToOuter {
+            ray: vis,
+            poly: leaf.poly,
+        };
+        to.transmittance(x, y, [NONE; 2])
     };
     // The form factor times the visibility of one point of the emitter weighs that point by
     // area, not by how much it sends x: in a penumbra the lamp's nearer, brighter half seen

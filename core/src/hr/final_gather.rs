@@ -17,7 +17,8 @@
 //! the thread count.
 
 use super::emitters::{
-    Emitters, MAX_DIRECT_EMITTERS, Receiver, Share, emitted_light, emitter_shares,
+    Emitters, MAX_DIRECT_EMITTERS, Receiver, Share, ToOuter, emitted_light, emitter_shares,
+    level_of,
 };
 use super::gather_rays::{adaptive_rays, gathered_share, polygon_rays};
 use super::ids::Elem;
@@ -151,12 +152,20 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
     } else {
         0.0
     };
-    let cut = if em.tree {
-        let centre = corners.iter().copied().sum::<Vec3>() / corners.len() as f32;
-        Some(super::emitter_tree::cut(st, ws, centre, nrm, poly)).filter(|c| !c.is_empty())
+    // The light cut: of this level's emitters, or of those of one level around it.
+    let cut_level = if em.tree {
+        Some(0)
     } else {
-        None
+        (em.outer_tree > 0).then_some(em.outer_tree)
     };
+    let cut = cut_level
+        .and_then(|lv| level_of(st, ws, vis.vis, lv).map(|(cst, cws)| (lv, cst, cws)))
+        .and_then(|(lv, cst, cws)| {
+            let centre = corners.iter().copied().sum::<Vec3>() / corners.len() as f32;
+            let skip = if lv == 0 { poly } else { NONE };
+            let c = super::emitter_tree::cut(cst, cws, centre, nrm, skip);
+            (!c.is_empty()).then_some((lv, cst, cws, c))
+        });
     for j in 0..n {
         let cell = ((j as u64 * stride as u64) % n as u64) as u32;
         let (ju, jv) = unit2(hash3(seed, j, 0xA3));
@@ -203,11 +212,19 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
                 }
             }
         }
-        if let Some(cut) = &cut {
+        if let Some((lv, cst, cws, cut)) = &cut {
             let h = hash3(seed, j, 0xE3);
             let pick = (j as f64 + unit2(h).0 as f64) / n as f64;
-            let leaf = Receiver { poly, nrm, x };
-            cast += super::emitter_tree::light(st, ws, vis, &leaf, cut, pick, h, &mut c[..nb]);
+            if *lv == 0 {
+                let leaf = Receiver { poly, nrm, x };
+                cast += super::emitter_tree::light(st, ws, vis, &leaf, cut, pick, h, &mut c[..nb]);
+            } else {
+                // An outer level's emitter: no polygon of that level is the receiver.
+                let leaf = Receiver { poly: NONE, nrm, x };
+                let to = ToOuter { ray: vis, poly };
+                cast +=
+                    super::emitter_tree::light(cst, cws, &to, &leaf, cut, pick, h, &mut c[..nb]);
+            }
         } else if total > 0.0 {
             let h = hash3(seed, j, 0xE3);
             let pick = (j as f32 + unit2(h).0) / n as f32;
