@@ -9,12 +9,12 @@
 //! polygon whose side facing the point emits nothing). Unbiased: every polygon that can
 //! light the point has a positive probability.
 
-use super::emitters::Receiver;
+use super::emitters::{Receiver, hidden_share};
 use super::final_gather::patch_corners;
 use super::ids::{Elem, Kind};
 use super::state::State;
 use crate::formfactor::{facing_side, point_polygon};
-use crate::sampling::{hash3, point_on, unit2};
+use crate::sampling::{hash3, point_in_front, unit2};
 use crate::visibility::Visibility;
 use glam::Vec3;
 
@@ -184,22 +184,26 @@ pub(crate) fn light<V: Visibility + ?Sized>(
     if !(f.is_finite() && f > 0.0) {
         return 0;
     }
-    for attempt in 0..8u32 {
-        let (u, v) = unit2(hash3(h, attempt, 0x9F));
-        let y = point_on(&lc[..k], u, v);
-        if n.dot(y - x) <= 0.0 {
-            continue;
+    // A point of the part of it in front of x, by area; where hidden, the form factor less
+    // that point's share (see `emitters::hidden_share`: unbiased in a penumbra).
+    let (u, v) = unit2(hash3(h, 0, 0x9F));
+    let pick = unit2(hash3(h, 1, 0x9F)).0;
+    let Some(y) = point_in_front(&lc[..k], x, n, pick, u, v) else {
+        return 0;
+    };
+    let t = vis.transmittance(x, y, [leaf.poly, d.poly]);
+    let visible = if t < 1.0 {
+        f - hidden_share(x, n, y, &lc[..k], Vec3::from(lp.normal), side, t)
+    } else {
+        f
+    };
+    if visible.is_finite() && visible != 0.0 {
+        let scale = visible / d.prob;
+        for (ck, e) in c.iter_mut().zip(&m.emit[side][..st.bands]) {
+            *ck += scale * e;
         }
-        let t = vis.transmittance(x, y, [leaf.poly, d.poly]);
-        if t > 0.0 {
-            let scale = t * f / d.prob;
-            for (ck, e) in c.iter_mut().zip(&m.emit[side][..st.bands]) {
-                *ck += scale * e;
-            }
-        }
-        return 1;
     }
-    0
+    1
 }
 
 /// The item among `count` whose cumulative weight passes `target`: (index, weight before

@@ -369,13 +369,10 @@ pub(super) fn emitted_light<V: Visibility + ?Sized>(
     let blocked = if t < 1.0 {
         let side = facing_side(x, lc[0], Vec3::from(lp.normal));
         side.map(|s| {
-            let ln = if s == 0 { 1.0 } else { -1.0 } * Vec3::from(lp.normal);
-            let r = y - x;
-            let r2 = r.length_squared();
-            let kernel =
-                n.dot(r).max(0.0) * (-ln.dot(r)).max(0.0) / (core::f32::consts::PI * r2 * r2);
-            let a = crate::sampling::area_in_front(&lc[..k], x, n);
-            (s, a * kernel * (1.0 - t))
+            (
+                s,
+                hidden_share(x, n, y, &lc[..k], Vec3::from(lp.normal), s, t),
+            )
         })
     } else {
         None
@@ -395,4 +392,27 @@ pub(super) fn emitted_light<V: Visibility + ?Sized>(
         }
     }
     1
+}
+
+/// What a point `y` of an emitting polygon (`corners`, front normal `normal`, emitting side
+/// `side` towards `x`) drawn uniformly over its part in front of the receiving plane at `x`
+/// (normal `n`) and seen with transmittance `t` takes off the unoccluded form factor: its
+/// kernel `cos cos / (pi r^2)` times that part's area times `1 - t`. The form factor less
+/// this is an unbiased estimate of the visible form factor, and exactly the form factor
+/// wherever nothing blocks.
+pub(super) fn hidden_share(
+    x: Vec3,
+    n: Vec3,
+    y: Vec3,
+    corners: &[Vec3],
+    normal: Vec3,
+    side: usize,
+    t: f32,
+) -> f32 {
+    let ln = if side == 0 { normal } else { -normal };
+    let r = y - x;
+    let r2 = r.length_squared();
+    let kernel = n.dot(r).max(0.0) * (-ln.dot(r)).max(0.0) / (core::f32::consts::PI * r2 * r2);
+    let a = crate::sampling::area_in_front(corners, x, n);
+    a * kernel * (1.0 - t)
 }
