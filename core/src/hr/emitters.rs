@@ -68,7 +68,9 @@ pub(super) fn level_of<'a, V: ?Sized>(
 }
 
 /// [`emitters`] of the level and, when it is an opened instance's, of the levels it is open
-/// in, if all of them fit in [`MAX_DIRECT_EMITTERS`] (see [`Emitters::outer`]).
+/// in: all of them one by one if they fit in [`MAX_DIRECT_EMITTERS`] (see
+/// [`Emitters::outer`]), or, more and all in one level around a level without its own, that
+/// level's light cut ([`Emitters::outer_tree`]); otherwise the level's own only.
 pub(crate) fn emitters_through<V: ?Sized>(st: &State, ws: &[u8], vis: &Vis<'_, V>) -> Emitters {
     let own = emitters(st, ws);
     if !own.direct || vis.outer_level(1).is_none() {
