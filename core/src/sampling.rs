@@ -201,7 +201,7 @@ pub fn area_in_front(corners: &[Vec3], on_plane: Vec3, normal: Vec3) -> f32 {
 }
 
 /// Area of a planar convex polygon (m^2).
-fn polygon_area(corners: &[Vec3]) -> f32 {
+pub fn polygon_area(corners: &[Vec3]) -> f32 {
     let mut twice = Vec3::ZERO;
     for t in 1..corners.len().saturating_sub(1) {
         twice += (corners[t] - corners[0]).cross(corners[t + 1] - corners[0]);

@@ -11,7 +11,8 @@ use super::vis::{Ray, Vis};
 use crate::formfactor::{facing_side, point_polygon};
 use crate::limits::NONE;
 use crate::sampling::{
-    MAX_CLIPPED_QUADRATURE, clipped_quadrature, hash3, point_in_front, subdivide, unit2,
+    MAX_CLIPPED_QUADRATURE, area_in_front, clipped_quadrature, hash3, point_in_front, polygon_area,
+    subdivide, unit2,
 };
 use crate::visibility::Visibility;
 use glam::Vec3;
@@ -47,6 +48,17 @@ pub(crate) struct Emitters {
 }
 
 impl Emitters {
+    /// No emitter, none to draw either (the fields to set follow).
+    const EMPTY: Emitters = Emitters {
+        ids: [NONE; MAX_DIRECT_EMITTERS],
+        levels: [0; MAX_DIRECT_EMITTERS],
+        count: 0,
+        direct: false,
+        tree: false,
+        outer: false,
+        outer_tree: 0,
+    };
+
     /// True when emission is added directly, not gathered by the rays.
     pub(super) fn apart(&self) -> bool {
         self.direct || self.tree
@@ -111,13 +123,9 @@ pub(crate) fn emitters_through<V: ?Sized>(st: &State, ws: &[u8], vis: &Vis<'_, V
         return own;
     }
     Emitters {
-        ids: [NONE; MAX_DIRECT_EMITTERS],
-        levels: [0; MAX_DIRECT_EMITTERS],
-        count: 0,
-        direct: false,
-        tree: false,
         outer: true,
         outer_tree: first as u8,
+        ..Emitters::EMPTY
     }
 }
 
@@ -150,23 +158,15 @@ fn emits(st: &State, ws: &[u8], i: u32) -> bool {
 /// Finds the scene's emitting polygons (see [`Emitters`]).
 pub(crate) fn emitters(st: &State, ws: &[u8]) -> Emitters {
     let mut out = Emitters {
-        ids: [NONE; MAX_DIRECT_EMITTERS],
-        levels: [0; MAX_DIRECT_EMITTERS],
-        count: 0,
         direct: true,
-        tree: false,
-        outer: false,
-        outer_tree: 0,
+        ..Emitters::EMPTY
     };
     for i in 0..st.polygons {
         if emits(st, ws, i) {
             if out.count == MAX_DIRECT_EMITTERS {
                 return Emitters {
-                    ids: [NONE; MAX_DIRECT_EMITTERS],
-                    count: 0,
-                    direct: false,
                     tree: true,
-                    ..out
+                    ..Emitters::EMPTY
                 };
             }
             out.ids[out.count] = i;
@@ -282,20 +282,11 @@ pub(super) fn emitter_shares<V: ?Sized>(
     total
 }
 
-/// The area of a planar triangle or quad (m^2).
-fn polygon_area(c: &[Vec3]) -> f32 {
-    let mut a = Vec3::ZERO;
-    for i in 1..c.len() - 1 {
-        a += (c[i] - c[0]).cross(c[i + 1] - c[0]);
-    }
-    0.5 * a.length()
-}
-
 /// Adds to `c` the irradiance at the leaf's sample from the emitting polygons: one emitter
 /// drawn by its share (`pick` in [0, 1)), a point of it from `spot` (in the unit square),
-/// its light at the point (exact unoccluded form
-/// factor from the point) or over the leaf (from a point of the emitter, by reciprocity),
-/// times one visibility ray. Returns the rays cast.
+/// its light at the point (exact unoccluded form factor from the point) or over the leaf
+/// (from a point of the emitter, by reciprocity), times what one visibility ray lets
+/// through (see [`hidden_share`]). Returns the rays cast.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn emitted_light<V: Visibility + ?Sized>(
     st: &State,
@@ -415,6 +406,6 @@ pub(super) fn hidden_share(
     let r = y - x;
     let r2 = r.length_squared();
     let kernel = n.dot(r).max(0.0) * (-ln.dot(r)).max(0.0) / (core::f32::consts::PI * r2 * r2);
-    let a = crate::sampling::area_in_front(corners, x, n);
+    let a = area_in_front(corners, x, n);
     a * kernel * (1.0 - t)
 }

@@ -13,7 +13,10 @@
 //! the contents see it as distant light, as they did when their tables were made.
 //! (Where the paper copies the links themselves onto the new root and refines them against
 //! the parent's elements, these beams keep the parent's state out of the child's
-//! workspace: only what the beams carry crosses the boundary.)
+//! workspace: only what the beams carry crosses the boundary.) The final gather of an opened
+//! level then reads the levels around through the stack, and takes their emitting polygons
+//! directly (see `emitters::emitters_through`): a lamp beside an opened chair is no beam
+//! from afar there.
 
 use super::census::{Census, expanded_originals, subtree_polygons};
 use super::error::{HrError, SolveError};
