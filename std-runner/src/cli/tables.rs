@@ -133,7 +133,11 @@ pub fn run(a: Args) -> Result<()> {
             hirad_core::tables::grid::MAX_SIDE
         )));
     }
-    let mut exec = RayonExecutor::new(a.threads.unwrap_or(0))?;
+    // The hr solves on every core unless told (0 or 1 would leave them on one thread).
+    let threads = a
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let mut exec = RayonExecutor::new(threads)?;
     let progress = Progress::new(a.quiet);
     let mut tables: Vec<OriginalTables> = Vec::new();
     for name in &a.originals {

@@ -9,7 +9,7 @@ use super::OriginalTables;
 use super::intercept::EscapeWeights;
 use super::original::Alone;
 use super::response::{PhaseValues, Returns, phase_values};
-use super::sample::{Sample, Visibilities, sample_at};
+use super::sample::{Sample, Visibilities, samples_at};
 use super::single_bake::{bake_single, first_scattering};
 use super::tau_bake::bake_tau;
 use crate::scene::Scene;
@@ -225,16 +225,15 @@ pub fn bake_alone(
     let mut solves = 1u32;
 
     // Check directions, off every grid (drawn uniformly), each solved once.
+    // Several suns a solve (see `Alone::solve_many`).
+    progress(&format!("{name}: check suns"), 0, 1);
+    let suns: Vec<Vec3> = (0..settings.checks)
+        .map(|k| uniform_direction(settings.seed, k, 0x7AB1E))
+        .collect();
+    let solved = samples_at(alone, &suns, settings, exec)?;
+    solves += solved.len() as u32;
     let mut checks = Vec::new();
-    for k in 0..settings.checks {
-        progress(
-            &format!("{name}: check suns"),
-            k as u64,
-            settings.checks as u64,
-        );
-        let d = uniform_direction(settings.seed, k, 0x7AB1E);
-        let sample = sample_at(alone, d, settings, exec)?;
-        solves += 1;
+    for (k, sample) in (0..settings.checks).zip(solved) {
         let mut out = Vec::new();
         for m in 0..settings.out_checks {
             let o = uniform_direction(settings.seed, k * 1000 + m, 0x0C7);

@@ -94,7 +94,8 @@ pub struct OriginalTables {
     pub out_tried: Vec<(u32, f32)>,
     /// True when every error met its target (false: a grid reached its largest side first).
     pub met: bool,
-    /// hr solves made (grids and checks).
+    /// Suns the original was solved under (grids and checks; several share one hr solve,
+    /// see [`Alone::solve_many`]).
     pub solves: u32,
     /// Rays cast for `tau` and the outgoing light.
     pub rays: u64,

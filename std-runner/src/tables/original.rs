@@ -148,13 +148,88 @@ impl Alone {
         let mut s = self.scene.clone();
         s.suns = suns;
         s.sky = sky;
-        let bytes = scene::compile(&s).map_err(|e| anyhow!("{e}"))?;
+        self.solve_scene(&s, settings, exec)
+    }
+
+    /// Solves the original under one sun of 1 W/m^2 in every band towards each of
+    /// `sources` (unit, its own frame), several suns per solve: each sun lights its own
+    /// copy of the bands (materials repeated), so a solve carries `MAX_BANDS / bands` of
+    /// them, their links refined where any of them needs it (refinement and convergence
+    /// are per band). Each sun's light is returned apart, in the order of `sources`.
+    pub fn solve_many(
+        &self,
+        sources: &[Vec3],
+        settings: &Settings,
+        exec: &mut RayonExecutor,
+    ) -> Result<Vec<Lit>> {
+        let nb = self.bands();
+        let per = (MAX_BANDS / nb).max(1);
+        let mut out = Vec::with_capacity(sources.len());
+        for chunk in sources.chunks(per) {
+            if chunk.len() == 1 {
+                out.push(self.solve(chunk[0], settings, exec)?);
+                continue;
+            }
+            let k = chunk.len();
+            let mut s = self.scene.clone();
+            s.bands = (nb * k) as u8;
+            s.band_names = (0..k)
+                .flat_map(|j| {
+                    self.scene
+                        .band_names
+                        .iter()
+                        .map(move |n| format!("{n}_{j}"))
+                })
+                .collect();
+            for m in &mut s.materials {
+                let d = &mut m.data;
+                d.bands = (nb * k) as u8;
+                for v in [
+                    &mut d.rho_front,
+                    &mut d.rho_back,
+                    &mut d.tau,
+                    &mut d.emit_front,
+                    &mut d.emit_back,
+                ] {
+                    for b in nb..nb * k {
+                        v[b] = v[b % nb];
+                    }
+                }
+            }
+            let area = |d: Vec3| hirad_core::tables::tau::projected_area(self.lo, self.hi, d);
+            s.suns = chunk
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| area(**d) > 0.0)
+                .map(|(j, d)| {
+                    let mut irr = [0.0f32; MAX_BANDS];
+                    irr[j * nb..(j + 1) * nb].fill(1.0);
+                    scene::light(*d, &irr[..nb * k])
+                })
+                .collect();
+            if s.suns.is_empty() {
+                for _ in chunk {
+                    out.push(self.dark()?);
+                }
+                continue;
+            }
+            let packed = self.solve_scene(&s, settings, exec)?;
+            for j in 0..k {
+                out.push(packed.band_slice(j * nb, nb));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Solves `s`, a copy of the original's scene with lights.
+    fn solve_scene(&self, s: &Scene, settings: &Settings, exec: &mut RayonExecutor) -> Result<Lit> {
+        let bytes = scene::compile(s).map_err(|e| anyhow!("{e}"))?;
         let view = scene::read_image(&bytes).map_err(|e| anyhow!("{e}"))?;
         let mut scratch = vec![0u8; hr::census_scratch_bytes(&view)];
         let plan = hr::plan(&view, settings, false, &mut scratch).map_err(|e| anyhow!("{e}"))?;
         let mut ws = vec![0u8; plan.suggested_bytes as usize];
         let two_sided = s.materials.iter().any(|m| m.data.two_sided);
-        let mut table = ResultsTable::new(self.bands(), two_sided);
+        let mut table = ResultsTable::new(s.bands as usize, two_sided);
         let stats = hr::solve(
             &view,
             settings,
@@ -209,6 +284,39 @@ impl Alone {
 }
 
 impl Lit {
+    /// The `n` bands from `first` of a solve whose bands hold several suns' (see
+    /// [`Alone::solve_many`]): one sun's light, its balance and the shared statistics.
+    fn band_slice(&self, first: usize, n: usize) -> Lit {
+        let t = &self.table;
+        let cut = |v: &[f32]| -> Vec<f32> {
+            v.chunks(t.bands)
+                .flat_map(|row| row[first..first + n].iter().copied())
+                .collect()
+        };
+        let table = ResultsTable {
+            bands: n,
+            two_sided: t.two_sided,
+            ids: t.ids.clone(),
+            areas: t.areas.clone(),
+            radiosity: [cut(&t.radiosity[0]), cut(&t.radiosity[1])],
+            irradiance: [cut(&t.irradiance[0]), cut(&t.irradiance[1])],
+        };
+        let mut stats = self.stats;
+        let b = &mut stats.balance;
+        for v in [
+            &mut b.emitted,
+            &mut b.direct,
+            &mut b.absorbed,
+            &mut b.absorbed_backs,
+            &mut b.escaped,
+        ] {
+            let mut w = [0.0f64; MAX_BANDS];
+            w[..n].copy_from_slice(&v[first..first + n]);
+            *v = w;
+        }
+        Lit { table, stats }
+    }
+
     /// The intensity (W/sr per band) leaving the original towards the unit `towards`, given
     /// each polygon's visible fraction that way: radiance x area x |cosine| x fraction.
     pub fn intensity(

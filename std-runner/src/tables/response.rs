@@ -16,10 +16,11 @@
 use super::bake::TableSettings;
 use super::intercept::EscapeWeights;
 use super::original::Alone;
-use super::sample::{Visibilities, sample_at};
+use super::sample::{Visibilities, samples_at};
 use crate::solve::RayonExecutor;
 use anyhow::Result;
 use glam::Vec3;
+use hirad_core::limits::MAX_BANDS;
 use hirad_core::tables::grid::DirectionGrid;
 use hirad_core::tables::phase::side_lit;
 use hirad_core::tables::tau::projected_area;
@@ -57,35 +58,43 @@ impl Returns {
         );
         let mut w = vec![0.0f32; polygons * 2 * cells * bands];
         let mut first = direct.map(|_| vec![0.0f32; w.len()]);
-        for o in 0..cells {
-            progress(o as u64, cells as u64);
-            let s = sample_at(alone, outgoing.direction(o as u32), settings, exec)?;
-            for p in 0..polygons {
-                let m = &alone.scene.materials[alone.materials[p] as usize].data;
-                let e = |side: usize, b: usize| {
-                    s.lit
-                        .table
-                        .irradiance(p, side)
-                        .get(b)
-                        .copied()
-                        .unwrap_or(0.0)
-                };
-                // Per side, what leaves it per unit irradiance on the fronts (ef) and backs (eb).
-                let put = |out: &mut [f32], b: usize, ef: f32, eb: f32| {
-                    out[((p * 2) * cells + o) * bands + b] = m.rho_front[b] * ef + m.tau[b] * eb;
-                    out[((p * 2 + 1) * cells + o) * bands + b] = m.rho_back[b] * eb + m.tau[b] * ef;
-                };
-                for b in 0..bands {
-                    put(&mut w, b, e(0, b), e(1, b));
-                }
-                if let (Some(first), Some(v)) = (&mut first, direct) {
-                    // The sun at `o` straight on the polygon: |cos| x visible fraction, on
-                    // the side facing it.
-                    let c = alone.normals[p].dot(outgoing.direction(o as u32));
-                    let lit = c.abs() * v.fraction(o as u32, p);
-                    let (ef, eb) = if c >= 0.0 { (lit, 0.0) } else { (0.0, lit) };
+        // Several cells' suns a solve, each in its own copy of the bands.
+        let per = (MAX_BANDS / bands).max(1);
+        for start in (0..cells).step_by(per) {
+            progress(start as u64, cells as u64);
+            let end = (start + per).min(cells);
+            let suns: Vec<Vec3> = (start..end).map(|o| outgoing.direction(o as u32)).collect();
+            let solved = samples_at(alone, &suns, settings, exec)?;
+            for (o, s) in (start..end).zip(solved) {
+                for p in 0..polygons {
+                    let m = &alone.scene.materials[alone.materials[p] as usize].data;
+                    let e = |side: usize, b: usize| {
+                        s.lit
+                            .table
+                            .irradiance(p, side)
+                            .get(b)
+                            .copied()
+                            .unwrap_or(0.0)
+                    };
+                    // Per side, what leaves it per unit irradiance on the fronts (ef) and backs (eb).
+                    let put = |out: &mut [f32], b: usize, ef: f32, eb: f32| {
+                        out[((p * 2) * cells + o) * bands + b] =
+                            m.rho_front[b] * ef + m.tau[b] * eb;
+                        out[((p * 2 + 1) * cells + o) * bands + b] =
+                            m.rho_back[b] * eb + m.tau[b] * ef;
+                    };
                     for b in 0..bands {
-                        put(first, b, ef, eb);
+                        put(&mut w, b, e(0, b), e(1, b));
+                    }
+                    if let (Some(first), Some(v)) = (&mut first, direct) {
+                        // The sun at `o` straight on the polygon: |cos| x visible fraction, on
+                        // the side facing it.
+                        let c = alone.normals[p].dot(outgoing.direction(o as u32));
+                        let lit = c.abs() * v.fraction(o as u32, p);
+                        let (ef, eb) = if c >= 0.0 { (lit, 0.0) } else { (0.0, lit) };
+                        for b in 0..bands {
+                            put(first, b, ef, eb);
+                        }
                     }
                 }
             }

@@ -58,6 +58,33 @@ pub fn sample_sides(
         ..settings.solve
     };
     let lit = alone.solve(source, &solve, exec)?;
+    Ok(measure(alone, source, lit, settings))
+}
+
+/// [`sample_at`] at every direction of `sources` (unit), several suns per solve (see
+/// [`Alone::solve_many`]); in the order of `sources`.
+pub fn samples_at(
+    alone: &Alone,
+    sources: &[Vec3],
+    settings: &TableSettings,
+    exec: &mut RayonExecutor,
+) -> Result<Vec<Sample>> {
+    let sources: Vec<Vec3> = sources.iter().map(|d| d.normalize()).collect();
+    let solve = Settings {
+        sun_sides: Settings::BOTH_SIDES,
+        ..settings.solve
+    };
+    let lits = alone.solve_many(&sources, &solve, exec)?;
+    Ok(sources
+        .iter()
+        .zip(lits)
+        .map(|(d, lit)| measure(alone, *d, lit, settings))
+        .collect())
+}
+
+/// What `lit`, the solve under a sun towards `source`, tells: the box's area, the light
+/// scattered, absorbed and intercepted, and `tau` by rays.
+fn measure(alone: &Alone, source: Vec3, lit: Lit, settings: &TableSettings) -> Sample {
     let area = projected_area(alone.lo, alone.hi, source);
     let t = tau(
         &alone.vis,
@@ -90,7 +117,7 @@ pub fn sample_sides(
     {
         *a = x + y;
     }
-    Ok(Sample {
+    Sample {
         source,
         area,
         scattered: frac(&b.escaped),
@@ -98,7 +125,7 @@ pub fn sample_sides(
         direct: frac(&b.direct),
         tau: t.tau,
         lit,
-    })
+    }
 }
 
 impl Sample {

@@ -404,3 +404,78 @@ fn the_first_scattering_kept_apart_and_the_rest_add_up_to_a_solves_light() {
         }
     }
 }
+
+#[test]
+fn suns_sharing_a_solve_each_get_their_own_light() {
+    // `solve_many` puts several suns in one solve, each in its own copy of the bands; each
+    // sun's light must be what a solve under it alone gives (the shared refinement is
+    // finer, never coarser): the scattered and absorbed power per band, and every lit
+    // polygon side's irradiance. Two bands (four suns a solve, six suns: 4 + 2) and three
+    // bands (two a solve, three suns: 2 + 1, the last alone).
+    use hirad_core::hr::Settings;
+    for bands in [2usize, 3] {
+        let mut scene = clump(0.4, 3);
+        if bands == 3 {
+            scene.bands = 3;
+            if !scene.band_names.is_empty() {
+                scene.band_names.push("third".into());
+            }
+            for m in &mut scene.materials {
+                m.data.bands = 3;
+                m.data.rho_front[2] = 0.3;
+                m.data.rho_back[2] = 0.2;
+                if m.data.two_sided {
+                    m.data.tau[2] = 0.25;
+                }
+            }
+        }
+        let alone = super::Alone::new(&scene, 0).unwrap();
+        let settings = Settings {
+            epsilon: 1e-4,
+            final_rays: 0,
+            ..Settings::default()
+        };
+        let mut exec = RayonExecutor::new(2).unwrap();
+        let suns: Vec<Vec3> = (0..if bands == 2 { 6 } else { 3 })
+            .map(|k| direction(k, 40 + bands as u32))
+            .collect();
+        let many = alone.solve_many(&suns, &settings, &mut exec).unwrap();
+        assert_eq!(many.len(), suns.len());
+        for (k, (d, got)) in suns.iter().zip(&many).enumerate() {
+            let want = alone.solve(*d, &settings, &mut exec).unwrap();
+            assert_eq!(got.table.bands, bands);
+            assert_eq!(got.table.len(), want.table.len());
+            let (g, w) = (&got.stats.balance, &want.stats.balance);
+            for b in 0..bands {
+                for (what, x, y) in [
+                    ("direct", g.direct[b], w.direct[b]),
+                    ("escaped", g.escaped[b], w.escaped[b]),
+                    (
+                        "absorbed",
+                        g.absorbed[b] + g.absorbed_backs[b],
+                        w.absorbed[b] + w.absorbed_backs[b],
+                    ),
+                ] {
+                    assert!(
+                        (x - y).abs() <= 0.01 * y.abs().max(1e-3),
+                        "{bands} bands, sun {k} band {b}: {what} {x} vs {y}"
+                    );
+                }
+                for p in 0..want.table.len() {
+                    for side in 0..2 {
+                        let (x, y) = (
+                            got.table.irradiance(p, side)[b],
+                            want.table.irradiance(p, side)[b],
+                        );
+                        assert!(
+                            (x - y).abs() <= 0.03 * y.max(0.05),
+                            "{bands} bands, sun {k} band {b} polygon {p} side {side}: {x} vs {y}"
+                        );
+                    }
+                }
+            }
+            // Nothing of the band copies beyond this sun's is left in its light.
+            assert!(got.stats.balance.escaped[bands..].iter().all(|&e| e == 0.0));
+        }
+    }
+}
