@@ -269,6 +269,7 @@ fn an_opened_instance_takes_a_lamp_around_it_polygon_by_polygon() {
         let stats = solve_hi(
             &view,
             &Settings::default(),
+            hirad_core::hr::Inline::NONE,
             &mut ws,
             &mut exec,
             &mut NoProgress,

@@ -316,6 +316,7 @@ fn hierarchical_instantiation_gives_every_polygon_its_light() {
         let stats = hirad_core::hr::solve_hi(
             &view,
             &settings,
+            hirad_core::hr::Inline::NONE,
             &mut ws,
             &mut exec,
             &mut hirad_core::hr::NoProgress,
@@ -328,6 +329,7 @@ fn hierarchical_instantiation_gives_every_polygon_its_light() {
         hirad_core::hr::solve_hi(
             &view,
             &settings,
+            hirad_core::hr::Inline::NONE,
             &mut ws,
             &mut RayonExecutor::new(1).unwrap(),
             &mut hirad_core::hr::NoProgress,

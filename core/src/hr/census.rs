@@ -6,7 +6,7 @@
 //! once and remembered in a small caller-provided scratch.
 
 use super::error::HrError;
-use super::settings::Instancing;
+use super::settings::{Inline, Instancing};
 use crate::image::{SceneSource, SceneView};
 use crate::limits::MAX_NODE_DEPTH;
 use crate::material::TWO_SIDED;
@@ -117,16 +117,25 @@ pub fn census<S: SceneSource>(
     max_children: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
-    census_level(view, max_children, Instancing::None, 0, scratch)
+    census_level(
+        view,
+        max_children,
+        Instancing::None,
+        Inline::NONE,
+        0,
+        scratch,
+    )
 }
 
-/// Counts the scene as a solve with `instancing` loads it, closed instances of originals
-/// of at most `blocking_polygons` polygons blocking with them (see
-/// `Settings::blocking_polygons`). `scratch` must hold [`census_scratch_bytes`].
+/// Counts the scene as a solve with `instancing` loads it (the originals `inline` names
+/// expanded in place), closed instances of originals of at most `blocking_polygons`
+/// polygons blocking with them (see `Settings::blocking_polygons`). `scratch` must hold
+/// [`census_scratch_bytes`].
 pub fn census_level<S: SceneSource>(
     view: &SceneView<S>,
     max_children: u32,
     instancing: Instancing,
+    inline: Inline<'_>,
     blocking_polygons: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
@@ -134,6 +143,7 @@ pub fn census_level<S: SceneSource>(
         view,
         max_children,
         instancing,
+        inline,
         blocking_polygons,
         view.info().scene_root.0,
         scratch,
@@ -146,6 +156,7 @@ pub(crate) fn census_at<S: SceneSource>(
     view: &SceneView<S>,
     max_children: u32,
     instancing: Instancing,
+    inline: Inline<'_>,
     blocking_polygons: u32,
     root: u32,
     scratch: &mut [u8],
@@ -175,11 +186,11 @@ pub(crate) fn census_at<S: SceneSource>(
     if instancing == Instancing::None {
         for k in 0..info.originals {
             let root = view.original(OriginalId(k))?.root;
-            memo[k as usize] = tree(view, root, max_children, two_sided, memo, None)?;
+            memo[k as usize] = tree(view, root, max_children, two_sided, memo)?;
         }
-        return tree(view, root, max_children, two_sided, memo, None);
+        return tree(view, root, max_children, two_sided, memo);
     }
-    let mut c = tree(view, root, max_children, two_sided, memo, Some(closed))?;
+    let mut c = level_tree(view, root, max_children, two_sided, inline, closed)?;
     // The tables of every original with closed instances, each once.
     for k in 0..info.originals {
         if closed[k as usize / 8] & (1 << (k % 8)) == 0 {
@@ -214,7 +225,7 @@ pub(crate) fn expanded_originals<S: SceneSource>(
 ) -> Result<(), HrError> {
     for k in 0..view.info().originals {
         let root = view.original(OriginalId(k))?.root;
-        let c = tree(view, root, 2, &[], memo, None)?;
+        let c = tree(view, root, 2, &[], memo)?;
         if let Some(m) = memo.get_mut(k as usize) {
             *m = c;
         }
@@ -229,7 +240,7 @@ pub(crate) fn subtree_polygons<S: SceneSource>(
     node: u32,
     memo: &[Census],
 ) -> Result<u64, HrError> {
-    Ok(tree(view, node, 2, &[], memo, None)?.polygons())
+    Ok(tree(view, node, 2, &[], memo)?.polygons())
 }
 
 /// A closed instance of `original`: one instance, the floats of the light it receives,
@@ -257,13 +268,130 @@ fn closed_instance<S: SceneSource>(
     })
 }
 
+/// A node of a level being walked: the next child node to visit and the end of its
+/// subtree, its children so far and what it holds.
+#[derive(Clone, Copy)]
+struct LevelFrame {
+    next: u32,
+    end: u32,
+    children: u64,
+    acc: Census,
+}
+
+/// The census of the level whose root is node `root`: instances below it stay closed
+/// (leaves) unless `inline` expands their original, whose contents (an exact instance's
+/// original's tree, an approximate one's own nodes) then count as part of the level, their
+/// own instances closed or expanded by the same rule. Originals with closed instances are
+/// marked in `closed`.
+fn level_tree<S: SceneSource>(
+    view: &SceneView<S>,
+    root: u32,
+    max_children: u32,
+    two_sided: &[u8],
+    inline: Inline<'_>,
+    closed: &mut [u8],
+) -> Result<Census, HrError> {
+    let mut stack: heapless::Vec<LevelFrame, MAX_NODE_DEPTH> = heapless::Vec::new();
+    let push = |stack: &mut heapless::Vec<LevelFrame, MAX_NODE_DEPTH>, node: u32| {
+        let rec = view.node(NodeId(node))?;
+        let own = own_polygons(view, &rec, two_sided)?;
+        stack
+            .push(LevelFrame {
+                next: node + 1,
+                end: rec.subtree_end,
+                children: rec.poly_count as u64,
+                acc: own,
+            })
+            .map_err(|_| HrError::SceneTooLarge)
+    };
+    push(&mut stack, root)?;
+    loop {
+        let Some(top) = stack.last_mut() else {
+            return Err(HrError::SceneTooLarge);
+        };
+        if top.next >= top.end {
+            let Some(mut f) = stack.pop() else { break };
+            f.acc.clusters = f
+                .acc
+                .clusters
+                .checked_add(grouping_clusters(f.children, max_children))
+                .ok_or(HrError::SceneTooLarge)?;
+            f.acc.max_children = f
+                .acc
+                .max_children
+                .max(f.children.min(u32::MAX as u64) as u32);
+            f.acc.depth += 1;
+            match stack.last_mut() {
+                Some(parent) => {
+                    parent.children += 1;
+                    parent.acc.add(&f.acc)?;
+                }
+                None => return Ok(f.acc),
+            }
+            continue;
+        }
+        let j = top.next;
+        let rec = view.node(NodeId(j))?;
+        top.next = rec.subtree_end.max(j + 1);
+        let node = match rec.instance() {
+            None => j,
+            Some(id) => {
+                let inst = view.instance(id)?;
+                if !inline.expands(inst.original) {
+                    let leaf = closed_instance(view, inst.original, closed)?;
+                    top.children += 1;
+                    top.acc.add(&leaf)?;
+                    continue;
+                }
+                if inst.is_exact() {
+                    view.original(inst.original())?.root
+                } else {
+                    j
+                }
+            }
+        };
+        push(&mut stack, node)?;
+    }
+    Err(HrError::SceneTooLarge)
+}
+
+/// A cluster for node `rec` and its own polygons by sidedness.
+fn own_polygons<S: SceneSource>(
+    view: &SceneView<S>,
+    rec: &crate::image::NodeRecord,
+    two_sided: &[u8],
+) -> Result<Census, HrError> {
+    let mut own = Census {
+        clusters: 1,
+        ..Census::default()
+    };
+    let mut polys = [crate::image::PolygonRecord::default(); 32];
+    let mut done = 0u32;
+    while done < rec.poly_count {
+        let n = (rec.poly_count - done).min(32);
+        view.polygons(PolyId(rec.poly_first + done), &mut polys[..n as usize])?;
+        for p in &polys[..n as usize] {
+            let m = p.material as usize;
+            if two_sided
+                .get(m / 8)
+                .is_some_and(|b| b & (1 << (m % 8)) != 0)
+            {
+                own.polys_two_sided += 1;
+            } else {
+                own.polys_one_sided += 1;
+            }
+        }
+        done += n;
+    }
+    Ok(own)
+}
+
 fn tree<S: SceneSource>(
     view: &SceneView<S>,
     root: u32,
     max_children: u32,
     two_sided: &[u8],
     memo: &[Census],
-    mut closed: Option<&mut [u8]>,
 ) -> Result<Census, HrError> {
     let mut stack: heapless::Vec<Frame, MAX_NODE_DEPTH> = heapless::Vec::new();
     let end = view.node(NodeId(root))?.subtree_end;
@@ -271,19 +399,7 @@ fn tree<S: SceneSource>(
     let mut i = root;
     while i < end {
         let rec = view.node(NodeId(i))?;
-        // An instance below the root that stays closed: a leaf of its parent, its subtree
-        // (an approximate instance's own geometry) skipped.
-        if let (Some(id), Some(closed), Some(parent)) =
-            (rec.instance(), closed.as_deref_mut(), stack.last_mut())
-        {
-            let inst = view.instance(id)?;
-            let leaf = closed_instance(view, inst.original, closed)?;
-            parent.children += 1;
-            parent.acc.add(&leaf)?;
-            i = rec.subtree_end.max(i + 1) - 1;
-        } else {
-            open(view, &rec, two_sided, memo, &mut stack, &mut result)?;
-        }
+        open(view, &rec, two_sided, memo, &mut stack, &mut result)?;
         // Close every subtree that ends after this node.
         while stack.last().is_some_and(|f| f.end == i + 1) {
             let Some(mut f) = stack.pop() else { break };
@@ -344,28 +460,7 @@ fn open<S: SceneSource>(
                 None => *result = sub,
             }
         } else {
-            let mut own = Census {
-                clusters: 1,
-                ..Census::default()
-            };
-            let mut polys = [crate::image::PolygonRecord::default(); 32];
-            let mut done = 0u32;
-            while done < rec.poly_count {
-                let n = (rec.poly_count - done).min(32);
-                view.polygons(PolyId(rec.poly_first + done), &mut polys[..n as usize])?;
-                for p in &polys[..n as usize] {
-                    let m = p.material as usize;
-                    if two_sided
-                        .get(m / 8)
-                        .is_some_and(|b| b & (1 << (m % 8)) != 0)
-                    {
-                        own.polys_two_sided += 1;
-                    } else {
-                        own.polys_one_sided += 1;
-                    }
-                }
-                done += n;
-            }
+            let own = own_polygons(view, rec, two_sided)?;
             let frame = Frame {
                 end: rec.subtree_end,
                 children: rec.poly_count as u64,

@@ -2,6 +2,7 @@
 //! or an opened instance's contents, placed, under the light that reached the instance
 //! (see `open`).
 
+use super::settings::Inline;
 use crate::geometry::Similarity;
 use crate::image::{SceneSource, SceneView};
 
@@ -30,6 +31,9 @@ pub(crate) struct LevelRoot<'b> {
     /// The scene's suns and sky (`None`), or these beams (see [`beam_floats`]) with how many
     /// of them, first, are suns.
     pub beams: Option<(&'b [f32], u32)>,
+    /// The originals whose instances the level expands in place (the policy, the same for
+    /// every level of a solve).
+    pub inline: Inline<'b>,
 }
 
 impl<'b> LevelRoot<'b> {
@@ -39,6 +43,7 @@ impl<'b> LevelRoot<'b> {
             node: view.info().scene_root.0,
             place: Similarity::IDENTITY,
             beams: None,
+            inline: Inline::NONE,
         }
     }
 

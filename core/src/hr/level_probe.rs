@@ -162,6 +162,7 @@ pub fn load_level<S: SceneSource>(
         view,
         settings.max_children,
         instancing,
+        super::settings::Inline::NONE,
         settings.blocking_polygons,
         &mut ws[..need],
     )?;

@@ -11,7 +11,7 @@ use super::ids::{Elem, Kind};
 use super::layout::{FRAME_BYTES, GROUP_ITEM_BYTES, Layout};
 use super::pool::{Blocks, Pool, read, write};
 use super::records::*;
-use super::settings::{Instancing, Settings, Stats};
+use super::settings::{Inline, Instancing, Settings, Stats};
 use super::state::State;
 use crate::geometry::{Aabb, Similarity, polygon_shape};
 use crate::image::{SceneSource, SceneView};
@@ -31,7 +31,8 @@ struct Frame {
     end: u32,
     /// Cluster index for the next child node.
     next_cluster: u32,
-    reserved: u32,
+    /// The instance expanded in place the node lies in (see `InstanceLeaf::pass`).
+    pass: u32,
     rotation: [f32; 4],
     translation: [f32; 3],
     scale: f32,
@@ -244,7 +245,10 @@ fn load_tree<S: SceneSource>(
     let lay = s.lay;
     let root = new_cluster(s, ws, NONE)?;
     let mut depth = 0usize;
-    open_node(view, s, ws, level.node, root, level.place, depth)?;
+    // Instances expanded in place so far, in the order entered (see `InstanceLeaf::pass`).
+    let mut passes = 0u32;
+    let inline = level.inline;
+    open_node(view, s, ws, inline, level.node, root, level.place, 0, depth)?;
     loop {
         let at = frame_at(&lay, depth);
         let mut f: Frame = read(ws, at);
@@ -258,7 +262,7 @@ fn load_tree<S: SceneSource>(
         let child = f.next;
         let rec = view.node(NodeId(child))?;
         f.next = rec.subtree_end;
-        if super::load_instances::closes(s, &rec) {
+        if super::load_instances::closes(view, s, inline, &rec)? {
             // A closed instance: its leaf was made with its parent's children.
             write(ws, at, &f);
             continue;
@@ -272,11 +276,17 @@ fn load_tree<S: SceneSource>(
             scale: f.scale,
         };
         let (node, t) = effective(view, child, &t)?;
+        let pass = if rec.instance().is_some() {
+            passes += 1;
+            passes
+        } else {
+            f.pass
+        };
         depth += 1;
         if frame_at(&lay, depth) + FRAME_BYTES > lay.group {
             return Err(HrError::SceneTooLarge);
         }
-        open_node(view, s, ws, node, cluster, t, depth)?;
+        open_node(view, s, ws, inline, node, cluster, t, pass, depth)?;
     }
     Ok(())
 }
@@ -303,15 +313,20 @@ fn effective<S: SceneSource>(
     }
 }
 
-/// Loads a node's own polygons into root patches, reserves clusters for its child nodes,
-/// groups the children, and pushes the frame that will visit the child nodes.
+/// Loads a node's own polygons into root patches, reserves clusters for its child nodes
+/// (closed instances among them become leaves at once, named by `pass`, see
+/// `InstanceLeaf::pass`), groups the children, and pushes the frame that will visit the
+/// child nodes.
+#[allow(clippy::too_many_arguments)]
 fn open_node<S: SceneSource>(
     view: &SceneView<S>,
     s: &mut State,
     ws: &mut [u8],
+    inline: Inline<'_>,
     node: u32,
     cluster: u32,
     t: Similarity,
+    pass: u32,
     depth: usize,
 ) -> Result<(), HrError> {
     let lay = s.lay;
@@ -348,8 +363,8 @@ fn open_node<S: SceneSource>(
     while j < rec.subtree_end {
         let c = view.node(NodeId(j))?;
         // A closed instance is a leaf at once; other nodes get clusters below.
-        let (elem, centre) = if super::load_instances::closes(s, &c) {
-            let e = super::load_instances::add_instance(view, s, ws, j, &t)?;
+        let (elem, centre) = if super::load_instances::closes(view, s, inline, &c)? {
+            let e = super::load_instances::add_instance(view, s, ws, j, pass, &t)?;
             let leaf = s.instance(ws, e.index());
             let b = Aabb::new(leaf.bbox_min.into(), leaf.bbox_max.into());
             (e.0, b.center())
@@ -391,7 +406,7 @@ fn open_node<S: SceneSource>(
         next: node + 1,
         end: rec.subtree_end,
         next_cluster: first_child_cluster,
-        reserved: 0,
+        pass,
         rotation: t.rotation.to_array(),
         translation: t.translation.to_array(),
         scale: t.scale,

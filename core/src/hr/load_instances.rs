@@ -6,16 +6,25 @@ use super::error::HrError;
 use super::ids::{Elem, Kind};
 use super::pool::{read, write};
 use super::records::*;
-use super::settings::Instancing;
+use super::settings::{Inline, Instancing};
 use super::state::State;
 use crate::NodeId;
 use crate::geometry::{Aabb, Similarity};
 use crate::image::{SceneSource, SceneView};
 use crate::limits::NONE;
 
-/// True when node `rec`, a child of a loaded node, is an instance that stays closed.
-pub(super) fn closes(s: &State, rec: &crate::image::NodeRecord) -> bool {
-    s.instancing == Instancing::Top && rec.instance().is_some()
+/// True when node `rec`, a child of a loaded node, is an instance that stays closed: any
+/// instance under [`Instancing::Top`], unless `inline` expands its original in place.
+pub(super) fn closes<S: SceneSource>(
+    view: &SceneView<S>,
+    s: &State,
+    inline: Inline<'_>,
+    rec: &crate::image::NodeRecord,
+) -> Result<bool, HrError> {
+    Ok(match rec.instance() {
+        Some(id) if s.instancing == Instancing::Top => !inline.expands(view.instance(id)?.original),
+        _ => false,
+    })
 }
 
 /// Makes the leaf of closed instance node `node` under transform `t` (its parent's), its
@@ -25,6 +34,7 @@ pub(super) fn add_instance<S: SceneSource>(
     s: &mut State,
     ws: &mut [u8],
     node: u32,
+    pass: u32,
     t: &Similarity,
 ) -> Result<Elem, HrError> {
     let lay = s.lay;
@@ -62,6 +72,7 @@ pub(super) fn add_instance<S: SceneSource>(
         slot,
         received: s.received_floats as u32,
         node,
+        pass,
         area_ref: 0.0,
     };
     let at = lay.received + 4 * s.received_floats;

@@ -68,7 +68,9 @@ pub use error::{HrError, SolveError};
 pub use exec::{Executor, NoProgress, Progress, Sequential};
 pub use open::solve_hi;
 pub use plan::{Plan, plan};
-pub use settings::{Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats, WorkspaceRegions};
+pub use settings::{
+    Inline, Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats, WorkspaceRegions,
+};
 
 use crate::image::{SceneSource, SceneView};
 use crate::sink::Sink;

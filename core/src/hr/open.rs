@@ -24,7 +24,7 @@ use super::exec::{Executor, Fallback, Progress};
 use super::ids::{Elem, Kind};
 use super::level::{LevelRoot, beam_floats};
 use super::run::Run;
-use super::settings::{Instancing, Settings, Stats};
+use super::settings::{Inline, Instancing, Settings, Stats};
 use super::state::State;
 use crate::NodeId;
 use crate::geometry::Similarity;
@@ -39,10 +39,14 @@ use glam::Vec3;
 const BEAM_SIDE: u32 = 8;
 
 /// Solves the scene level by level (see the module documentation) with the core's own BVH,
-/// and hands every polygon to `sink` in global-id order.
+/// and hands every polygon to `sink` in global-id order. Instances of the originals
+/// `inline` names are expanded in place in their parent's level instead of being closed
+/// (the paper's skipped levels; [`Inline::NONE`]: every level of instances closed).
+#[allow(clippy::too_many_arguments)]
 pub fn solve_hi<S, K, E, P>(
     view: &SceneView<S>,
     settings: &Settings,
+    inline: Inline<'_>,
     workspace: &mut [u8],
     executor: &mut E,
     progress: &mut P,
@@ -86,7 +90,10 @@ where
     let scene_sides = whole.polys_one_sided + 2 * whole.polys_two_sided;
     let mut total = Stats::default();
     let origin = memo_bytes.next_multiple_of(super::layout::ALIGN);
-    let root = LevelRoot::scene(view);
+    let root = LevelRoot {
+        inline,
+        ..LevelRoot::scene(view)
+    };
     let mut ctx = Ctx {
         view,
         settings,
@@ -236,63 +243,99 @@ where
     let mut next_id = first_id;
     // Level polygons not yet handed out: from `polygon - pending` on.
     let mut pending = 0u32;
-    let end = view.node(NodeId(root.node))?.subtree_end;
-    let mut i = root.node;
-    while i < end {
-        let rec = view.node(NodeId(i))?;
-        if i != root.node && rec.instance().is_some() {
-            flush(
-                ctx,
-                &st,
-                mine,
-                &vis,
-                exec,
-                scratch,
-                polygon,
-                &mut pending,
-                next_id,
-            )?;
-            let leaf = find_instance(&st, mine, i);
-            let (node, place) = contents(view, &st, mine, leaf, i)?;
-            let count = subtree_polygons(view, node, ctx.memo)?;
-            if count > 0 {
-                let n = beams(&st, mine, leaf, free, 0)?;
-                let bands = st.bands;
-                let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
-                let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
-                let floats: &[f32] = bytemuck::cast_slice(&b[..n * beam_floats(bands) * 4]);
-                let child = LevelRoot {
-                    node,
-                    place,
-                    beams: Some((floats, st.suns)),
-                };
-                // The contents' rays go on through this level (and those it is open in).
-                let here = super::vis::Outer {
-                    vis: &vis,
-                    st: &st,
-                    ws: mine,
-                    opened: leaf,
-                };
-                level(
-                    ctx,
-                    &child,
-                    Some(&here),
-                    child_ws,
-                    origin + used + bytes,
-                    &mut *exec,
-                    next_id,
-                    depth + 1,
-                )?;
-            }
-            next_id += count;
-            i = rec.subtree_end.max(i + 1);
+    // The level's nodes depth first, as `load` walked them: instances expanded in place
+    // entered (and numbered, see `InstanceLeaf::pass`) in the same order.
+    let mut stack: heapless::Vec<Walk, MAX_NODE_DEPTH> = heapless::Vec::new();
+    let mut passes = 0u32;
+    let enter = |node: u32, pass: u32, stack: &mut heapless::Vec<Walk, MAX_NODE_DEPTH>| {
+        let rec = view.node(NodeId(node))?;
+        stack
+            .push(Walk {
+                next: node + 1,
+                end: rec.subtree_end,
+                pass,
+            })
+            .map_err(|_| HrError::SceneTooLarge)?;
+        Ok::<u32, HrError>(rec.poly_count)
+    };
+    let own = enter(root.node, 0, &mut stack)?;
+    polygon += own;
+    pending += own;
+    next_id += own as u64;
+    while let Some(top) = stack.last_mut() {
+        if top.next >= top.end {
+            stack.pop();
             continue;
         }
+        let i = top.next;
+        let pass = top.pass;
+        let rec = view.node(NodeId(i))?;
+        top.next = rec.subtree_end.max(i + 1);
+        let mut node = i;
+        let mut pass_in = pass;
+        if let Some(id) = rec.instance() {
+            let inst = view.instance(id)?;
+            if root.inline.expands(inst.original) {
+                // Expanded in place: its contents are part of this level.
+                passes += 1;
+                pass_in = passes;
+                if inst.is_exact() {
+                    node = view.original(inst.original())?.root;
+                }
+            } else {
+                flush(
+                    ctx,
+                    &st,
+                    mine,
+                    &vis,
+                    exec,
+                    scratch,
+                    polygon,
+                    &mut pending,
+                    next_id,
+                )?;
+                let leaf = find_instance(&st, mine, i, pass);
+                let (node, place) = contents(view, &st, mine, leaf, i)?;
+                let count = subtree_polygons(view, node, ctx.memo)?;
+                if count > 0 {
+                    let n = beams(&st, mine, leaf, free, 0)?;
+                    let bands = st.bands;
+                    let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
+                    let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
+                    let floats: &[f32] = bytemuck::cast_slice(&b[..n * beam_floats(bands) * 4]);
+                    let child = LevelRoot {
+                        node,
+                        place,
+                        beams: Some((floats, st.suns)),
+                        inline: root.inline,
+                    };
+                    // The contents' rays go on through this level (and those it is open in).
+                    let here = super::vis::Outer {
+                        vis: &vis,
+                        st: &st,
+                        ws: mine,
+                        opened: leaf,
+                    };
+                    level(
+                        ctx,
+                        &child,
+                        Some(&here),
+                        child_ws,
+                        origin + used + bytes,
+                        &mut *exec,
+                        next_id,
+                        depth + 1,
+                    )?;
+                }
+                next_id += count;
+                continue;
+            }
+        }
         // The level's own polygons, in load order (its nodes depth first).
-        polygon += rec.poly_count;
-        pending += rec.poly_count;
-        next_id += rec.poly_count as u64;
-        i += 1;
+        let own = enter(node, pass_in, &mut stack)?;
+        polygon += own;
+        pending += own;
+        next_id += own as u64;
     }
     flush(
         ctx,
@@ -362,11 +405,23 @@ where
     Ok(())
 }
 
-/// The closed instance of node `node` (NONE when the level has none: it was loaded as
-/// such, so it cannot happen).
-fn find_instance(st: &State, ws: &[u8], node: u32) -> u32 {
+/// A node of a level being handed out: the next child node, the end of its subtree and
+/// the instance expanded in place it lies in (see `InstanceLeaf::pass`).
+#[derive(Clone, Copy)]
+struct Walk {
+    next: u32,
+    end: u32,
+    pass: u32,
+}
+
+/// The closed instance of node `node` in expansion `pass` (NONE when the level has none: it
+/// was loaded as such, so it cannot happen).
+fn find_instance(st: &State, ws: &[u8], node: u32, pass: u32) -> u32 {
     (0..st.instances)
-        .find(|&k| st.instance(ws, k).node == node)
+        .find(|&k| {
+            let l = st.instance(ws, k);
+            l.node == node && l.pass == pass
+        })
         .unwrap_or(NONE)
 }
 

@@ -137,6 +137,10 @@ pub(crate) struct InstanceLeaf {
     pub received: u32,
     /// Its node in the image (to open it).
     pub node: u32,
+    /// The instance expanded in place that it lies in, numbered in the order a level's
+    /// walk enters them (0: the level's own nodes); with `node`, it names the instance
+    /// within its level (an original expanded twice holds the same nodes twice).
+    pub pass: u32,
     /// Its reference area (m^2): 4 x its contents' cross-section `(1 - tau) A` averaged over
     /// the sphere, the area of an isotropic volume that intercepts as much (see
     /// `instance_kernel`).

@@ -108,6 +108,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             view,
             settings.max_children,
             instancing,
+            level.inline,
             settings.blocking_polygons,
             level.node,
             &mut ws[..need],

@@ -15,6 +15,37 @@ pub enum Instancing {
     Top,
 }
 
+/// The originals whose instances a level of hierarchical instantiation expands in place,
+/// in the level of their parent, instead of closing them (the paper's skipped levels,
+/// section 4 "Instantiation policy"): one bit per original, bit `k % 8` of byte `k / 8`
+/// for original `k`, in storage the caller owns. An original past the bits is closed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Inline<'a> {
+    bits: &'a [u8],
+}
+
+impl<'a> Inline<'a> {
+    /// No original expanded in place: every instance below a level's root stays closed.
+    pub const NONE: Inline<'static> = Inline { bits: &[] };
+
+    /// The originals whose bits are set in `bits` are expanded in place.
+    pub const fn new(bits: &'a [u8]) -> Self {
+        Inline { bits }
+    }
+
+    /// True when instances of original `original` are expanded in place.
+    pub fn expands(&self, original: u32) -> bool {
+        self.bits
+            .get(original as usize / 8)
+            .is_some_and(|b| b & (1 << (original % 8)) != 0)
+    }
+
+    /// Bytes of a bit set over `originals` originals.
+    pub const fn bytes(originals: u32) -> usize {
+        (originals as usize).div_ceil(8)
+    }
+}
+
 /// What the caller chooses: speed against accuracy.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {

@@ -6,6 +6,7 @@ use crate::exact::{self, ExactSettings};
 use crate::exit::{input, not_right, usage};
 use crate::files;
 use crate::output::{self, ImageSink, Outputs, Progress, ReferenceSink, ResultsFile, SolveReport};
+use crate::solve::policy::{self, Decision, Policy};
 use crate::solve::{self, VisibilityChoice};
 use anyhow::{Context, Result, anyhow};
 use hirad_core::hr::Settings;
@@ -27,17 +28,6 @@ pub enum Method {
     Exact,
 }
 
-/// Which instances `--method hi` keeps closed (`--instancing`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum InstancingChoice {
-    /// Every instance closed through its original's tables at its parent's level, and
-    /// opened in turn (the paper's figure 2): memory holds one path of levels.
-    All,
-    /// Every instance expanded: hierarchical radiosity over the whole scene, the same
-    /// solver and results as `--method hr` (no tables needed).
-    None,
-}
-
 /// Arguments of `hirad solve`.
 #[derive(clap::Args, Debug)]
 #[command(
@@ -50,10 +40,14 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Method::Hr)]
     pub method: Method,
     /// Which instances `--method hi` keeps closed: `all` (each level's instances closed
-    /// through their tables, then opened one at a time) or `none` (every instance expanded:
-    /// `--method hr`, results identical). Default: `all` with `--method hi`.
-    #[arg(long, value_enum)]
-    pub instancing: Option<InstancingChoice>,
+    /// through their tables, then opened one at a time), `every:N` (the instances at
+    /// instancing depths 1, N + 1, 2N + 1, ... closed, the others expanded in place in their
+    /// parent's level), `auto` (closed, except originals that emit light and, when the scene
+    /// has no tables for them, originals of more than 8,000 polygons expanded; what it
+    /// chose is printed) or `none` (every instance expanded: `--method hr`, results
+    /// identical). Default: `auto` with `--method hi`.
+    #[arg(long)]
+    pub instancing: Option<Policy>,
     /// Largest side of every direction grid of the tables `--method hi` makes for originals
     /// the scene has none for (4 to 128; default: those of `hirad tables`): coarser tables,
     /// made faster. Tables come from the table cache when it holds them.
@@ -211,10 +205,9 @@ pub fn run(a: Args) -> Result<()> {
     }
     // `hi` with every instance expanded is hierarchical radiosity over the whole scene: the
     // same solver, and the same results, as `--method hr`.
-    let instancing =
-        (a.method == Method::Hi).then(|| a.instancing.unwrap_or(InstancingChoice::All));
+    let instancing = (a.method == Method::Hi).then(|| a.instancing.unwrap_or(Policy::Auto));
     let a = Args {
-        method: if instancing == Some(InstancingChoice::None) {
+        method: if instancing == Some(Policy::None) {
             Method::Hr
         } else {
             a.method
@@ -254,9 +247,19 @@ pub fn run(a: Args) -> Result<()> {
     // records (a canopy's are 20 MB a copy: loading them twice over was the run's peak).
     let binary_hi = a.method == Method::Hi
         && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
+    // Which originals hi closes (`--instancing`), decided on the file's image where there is
+    // one, else on the loaded scene's.
+    let decide = |view: &hirad_core::image::SceneView<_>, p: Policy| {
+        policy::decide(view, p).map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))
+    };
+    let mut decision: Option<Decision> = match instancing {
+        Some(p) if binary_hi => Some(decide(&files::open_image(&a.scene)?, p)?),
+        _ => None,
+    };
     let mut loaded = if binary_hi {
         let lean = files::load_scene_records(&a.scene)?;
-        if crate::tables::missing(&lean.scene).is_empty() {
+        let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();
+        if crate::tables::missing_of(&lean.scene, &closed).is_empty() {
             lean
         } else {
             files::load_scene(&a.scene)?
@@ -265,8 +268,31 @@ pub fn run(a: Args) -> Result<()> {
         files::load_scene(&a.scene)?
     };
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
+    if let (Some(p), None) = (instancing, &decision)
+        && p != Policy::None
+    {
+        let bytes = files::compile(&a.scene, &loaded.scene)?;
+        let view = crate::scene::read_image(&bytes)
+            .map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?;
+        decision = Some(
+            policy::decide(&view, p).map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?,
+        );
+    }
+    if let Some(d) = &decision {
+        if !a.quiet && d.originals.iter().any(|c| c.instances > 0) {
+            eprintln!("{}", d.describe());
+        }
+        if let Some(c) = d.closed_emitter() {
+            return refuse(format!(
+                "--instancing {} closes the instances of '{}', which emit light: tables carry no emission, so their light would be lost (--instancing auto expands them in place)",
+                d.policy, c.name
+            ));
+        }
+    }
     let progress = Progress::new(a.quiet);
-    let tables_made = super::solve_tables::complete(&a, &mut loaded.scene, threads, &progress)?;
+    let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();
+    let tables_made =
+        super::solve_tables::complete(&a, &mut loaded.scene, &closed, threads, &progress)?;
     let up = a.up.unwrap_or(loaded.up);
     let image = if binary_hi && tables_made.is_none() {
         Some(files::open_image(&a.scene)?)
@@ -471,7 +497,7 @@ pub fn run(a: Args) -> Result<()> {
             memory_bytes: if hr { a.memory } else { None },
             visibility: hr.then(|| format!("{:?}", a.visibility).to_lowercase()),
             blocking_polygons: (a.method == Method::Hi).then_some(a.blocking_polygons),
-            instancing: instancing.map(|i| format!("{i:?}").to_lowercase()),
+            instancing: instancing.map(|p| p.to_string()),
             elements: (!hr).then_some(a.elements),
             threads: a.threads.map(u32::from),
             image: image_settings,
@@ -508,10 +534,14 @@ pub fn run(a: Args) -> Result<()> {
                 ..Settings::default()
             };
             let run = if a.method == Method::Hi {
+                let inline = decision
+                    .as_ref()
+                    .map_or(hirad_core::hr::Inline::NONE, |d| d.inline());
                 match &image {
                     Some(view) => solve::solve_hi_image(
                         view,
                         &settings,
+                        inline,
                         threads,
                         a.memory,
                         &progress,
@@ -520,6 +550,7 @@ pub fn run(a: Args) -> Result<()> {
                     None => solve::solve_hi(
                         scene,
                         &settings,
+                        inline,
                         threads,
                         a.memory,
                         &progress,

@@ -7,17 +7,19 @@ use crate::scene::Scene;
 use crate::tables::Completed;
 use anyhow::{Context, Result};
 
-/// Adds to `scene` the tables of the instanced originals it lacks when `a` asks for `--method
-/// hi` (saying so, and warning about tables that miss their targets); `None` when none was
-/// needed. Warns that `--table-max-side` does nothing with another method.
+/// Adds to `scene` the tables it lacks of the originals `closed` names (those `--method hi`
+/// closes) when `a` asks for that method (saying so, and warning about tables that miss
+/// their targets); `None` when none was needed. Warns that `--table-max-side` does nothing
+/// with another method.
 pub(super) fn complete(
     a: &Args,
     scene: &mut Scene,
+    closed: &[usize],
     threads: usize,
     progress: &Progress,
 ) -> Result<Option<Completed>> {
     if a.method == Method::Hi {
-        let missing = crate::tables::missing(scene);
+        let missing = crate::tables::missing_of(scene, closed);
         if !missing.is_empty() {
             if !a.quiet {
                 let names: Vec<&str> = missing
@@ -32,6 +34,7 @@ pub(super) fn complete(
             }
             let made = crate::tables::complete(
                 scene,
+                &missing,
                 threads,
                 a.table_max_side,
                 &mut |what: &str, done: u64, total: u64| progress.phase_at(what, Some(total), done),

@@ -4,6 +4,7 @@ use crate::files;
 use crate::output::Progress;
 
 use crate::solve::RayonExecutor;
+use crate::solve::policy::{self, Policy};
 use crate::tables::{
     Cache, CheckReport, OriginalTables, TableSettings, check, instanced_originals, obtain,
     write_bidirectional, write_directions,
@@ -61,9 +62,16 @@ pub struct Args {
     /// Write the tables' figures (and the checks') as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// Only the originals with these names (repeatable; default: every instanced original).
+    /// Only the originals with these names (repeatable; default: the originals `hirad solve
+    /// --method hi` closes under `--instancing`).
     #[arg(long = "original", value_name = "NAME")]
     pub originals: Vec<String>,
+    /// Without `--original`: the tables of the originals this policy of `hirad solve
+    /// --instancing` closes (`all`: every instanced original; `auto`, the default: all but
+    /// those that emit light and those of more than 8,000 polygons expanded the scene has no
+    /// tables for; `every:N`: those at instancing depths 1, N + 1, ...).
+    #[arg(long, conflicts_with = "originals")]
+    pub instancing: Option<Policy>,
     /// Largest side of the grid of outgoing directions (side x side suns, one solve each).
     #[arg(long, default_value_t = 32)]
     pub max_out_side: u32,
@@ -154,9 +162,27 @@ pub fn run(a: Args) -> Result<()> {
             )));
         }
     }
+    // Without names, the originals the policy closes.
+    let closed: Option<Vec<usize>> = if a.originals.is_empty() {
+        let policy = a.instancing.unwrap_or(Policy::Auto);
+        let bytes = files::compile(&a.scene, &scene)?;
+        let view = crate::scene::read_image(&bytes)
+            .map_err(|e| crate::exit::input(anyhow::anyhow!("{}: {e}", a.scene.display())))?;
+        let d = policy::decide(&view, policy)
+            .map_err(|e| crate::exit::input(anyhow::anyhow!("{}: {e}", a.scene.display())))?;
+        if !a.quiet && d.originals.iter().any(|c| c.instances > 0) {
+            eprintln!("{}", d.describe());
+        }
+        Some(d.closed().collect())
+    } else {
+        None
+    };
     let chosen: Vec<usize> = instanced_originals(&scene)
         .into_iter()
-        .filter(|&o| a.originals.is_empty() || a.originals.contains(&scene.originals[o].name))
+        .filter(|&o| match &closed {
+            Some(c) => c.contains(&o),
+            None => a.originals.contains(&scene.originals[o].name),
+        })
         .collect();
     {
         use crate::paths::Output;

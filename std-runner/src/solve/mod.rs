@@ -2,6 +2,7 @@
 //! core's own BVH), or the exact reference solver.
 
 mod executor;
+pub mod policy;
 
 pub use executor::RayonExecutor;
 use std::time::Instant;
@@ -11,7 +12,7 @@ use crate::scene::{self, ExpandVisitor, ExpandedNode, Scene};
 use crate::visibility::ObvhsVisibility;
 use anyhow::{Context, Result, anyhow};
 use glam::Vec3;
-use hirad_core::hr::{self, HrError, Plan, Settings, SolveError, Stats};
+use hirad_core::hr::{self, HrError, Inline, Plan, Settings, SolveError, Stats};
 use hirad_core::image::{SceneSource, SceneView};
 use hirad_core::sink::Sink;
 
@@ -162,16 +163,19 @@ pub fn solve_hr<K: Sink<Error = anyhow::Error>>(
     sink: &mut K,
 ) -> Result<HrRun> {
     run_hr(
-        scene, settings, false, threads, memory, visibility, progress, sink,
+        scene, settings, None, threads, memory, visibility, progress, sink,
     )
 }
 
 /// Solves `scene` by hierarchical instantiation (`hirad_core::hr::solve_hi`: level by
-/// level, the instances closed through the tables the scene carries), streaming results
-/// into `sink` in global-id order.
+/// level, the instances closed through the tables the scene carries, those of the originals
+/// `inline` names expanded in place: see [`policy`]), streaming results into `sink` in
+/// global-id order.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_hi<K: Sink<Error = anyhow::Error>>(
     scene: &Scene,
     settings: &Settings,
+    inline: Inline<'_>,
     threads: usize,
     memory: Option<u64>,
     progress: &Progress,
@@ -180,7 +184,7 @@ pub fn solve_hi<K: Sink<Error = anyhow::Error>>(
     run_hr(
         scene,
         settings,
-        true,
+        Some(inline),
         threads,
         memory,
         VisibilityChoice::Core,
@@ -192,9 +196,11 @@ pub fn solve_hi<K: Sink<Error = anyhow::Error>>(
 /// [`solve_hi`] straight from a scene image (a `.hirb` file read on demand, see
 /// `files::FileSource`): the tables are read into the workspace once, and no other copy of
 /// them is held.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_hi_image<S: SceneSource, K: Sink<Error = anyhow::Error>>(
     view: &SceneView<S>,
     settings: &Settings,
+    inline: Inline<'_>,
     threads: usize,
     memory: Option<u64>,
     progress: &Progress,
@@ -205,7 +211,7 @@ pub fn solve_hi_image<S: SceneSource, K: Sink<Error = anyhow::Error>>(
         view,
         None,
         settings,
-        true,
+        Some(inline),
         threads,
         memory,
         VisibilityChoice::Core,
@@ -219,7 +225,7 @@ pub fn solve_hi_image<S: SceneSource, K: Sink<Error = anyhow::Error>>(
 fn run_hr<K: Sink<Error = anyhow::Error>>(
     scene: &Scene,
     settings: &Settings,
-    hi: bool,
+    hi: Option<Inline<'_>>,
     threads: usize,
     memory: Option<u64>,
     visibility: VisibilityChoice,
@@ -249,7 +255,7 @@ fn run_view<S: SceneSource, K: Sink<Error = anyhow::Error>>(
     view: &SceneView<S>,
     scene: Option<&Scene>,
     settings: &Settings,
-    hi: bool,
+    hi_inline: Option<Inline<'_>>,
     threads: usize,
     memory: Option<u64>,
     visibility: VisibilityChoice,
@@ -257,6 +263,7 @@ fn run_view<S: SceneSource, K: Sink<Error = anyhow::Error>>(
     sink: &mut K,
     setup: Instant,
 ) -> Result<HrRun> {
+    let hi = hi_inline.is_some();
     let internal = visibility == VisibilityChoice::Core || hi;
     let mut scratch = vec![0u8; hr::census_scratch_bytes(view)];
     let plan = hr::plan(view, settings, internal, &mut scratch).map_err(classify)?;
@@ -311,9 +318,10 @@ fn run_view<S: SceneSource, K: Sink<Error = anyhow::Error>>(
     adapter.times.push(("setup".to_string(), 0.0));
     adapter.current = Some((0, setup));
     let result = match visibility {
-        _ if hi => hr::solve_hi(
+        _ if let Some(inline) = hi_inline => hr::solve_hi(
             view,
             settings,
+            inline,
             &mut workspace,
             &mut exec,
             &mut adapter,

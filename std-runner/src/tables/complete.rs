@@ -104,24 +104,33 @@ pub fn obtain(
 
 /// The instanced originals of `scene` without tables.
 pub fn missing(scene: &Scene) -> Vec<usize> {
+    let all: Vec<usize> = (0..scene.originals.len()).collect();
+    missing_of(scene, &all)
+}
+
+/// Of the originals `wanted`, the instanced ones without tables, inner ones first (see
+/// [`instanced_originals`]).
+pub fn missing_of(scene: &Scene, wanted: &[usize]) -> Vec<usize> {
     instanced_originals(scene)
         .into_iter()
+        .filter(|o| wanted.contains(o))
         .filter(|&o| !scene.tables.iter().any(|t| t.original == o))
         .collect()
 }
 
-/// Adds to `scene` the tables of every instanced original that has none, with the defaults
+/// Adds to `scene` the tables of the instanced originals of `originals` that have none, with the defaults
 /// of `hirad tables` (every grid's largest side at most `max_side` when given: coarser and
 /// faster), from the default cache (see [`Cache::locate`]) where it holds them.
 pub fn complete(
     scene: &mut Scene,
+    originals: &[usize],
     threads: usize,
     max_side: Option<u32>,
     report: &mut dyn FnMut(&str, u64, u64),
 ) -> Result<Completed> {
     let start = std::time::Instant::now();
     let mut done = Completed::default();
-    let todo = missing(scene);
+    let todo = missing_of(scene, originals);
     if todo.is_empty() {
         return Ok(done);
     }

@@ -1,0 +1,292 @@
+//! `--instancing`: originals expanded in place in their parent's level (the paper's skipped
+//! levels) instead of closed. On the small plant (5 approximate branches of 4 approximate
+//! twigs), every choice of originals to expand hands out every polygon once, in global-id
+//! order, solves as many levels as it leaves closed instances (plus the top), and agrees
+//! with hr as the all-closed solve does; `every:N` and `auto` from the command line; a
+//! policy that would close an emitting original is refused, and `auto` expands it.
+
+mod common;
+
+use common::{fails_with, fixture, hirad, s};
+use hirad::output::ResultsTable;
+use hirad::solve::RayonExecutor;
+use hirad_core::hr::{Inline, NoProgress, Settings, Stats};
+use hirad_core::image::{SceneView, SliceSource};
+
+/// The plant with coarse tables of both originals (twig 0, branch 1), as an image.
+fn plant_image(dir: &std::path::Path) -> Vec<u8> {
+    let image = dir.join("plant.hirb");
+    let out = hirad(&[
+        "tables",
+        s(&fixture("small_plant.hir")),
+        "-o",
+        s(&image),
+        "--instancing",
+        "all",
+        "--max-side",
+        "4",
+        "--max-tau-side",
+        "8",
+        "--max-out-side",
+        "8",
+        "--max-single-side",
+        "32",
+        "--no-cache",
+        "-q",
+    ]);
+    // Coarse tables miss their targets (exit 1) and are written all the same.
+    assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::read(&image).unwrap()
+}
+
+/// Absorbed power per polygon (W, both sides, per band) of a results table.
+fn absorbed(t: &ResultsTable) -> Vec<[f64; 2]> {
+    (0..t.len())
+        .map(|p| {
+            let mut a = [0.0f64; 2];
+            for side in 0..2 {
+                let (e, b) = (t.irradiance(p, side), t.radiosity(p, side));
+                for (k, v) in a.iter_mut().enumerate() {
+                    *v += t.areas[p] as f64
+                        * (e.get(k).copied().unwrap_or(0.0) - b.get(k).copied().unwrap_or(0.0))
+                            as f64;
+                }
+            }
+            a
+        })
+        .collect()
+}
+
+#[test]
+fn originals_expanded_in_place_solve_as_the_closed_ones_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = plant_image(dir.path());
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    let settings = Settings::default();
+    let mut ws = vec![0u8; 64 << 20];
+    let mut exec = RayonExecutor::new(2).unwrap();
+    let mut hr = ResultsTable::new(2, true);
+    hirad_core::hr::solve(
+        &view,
+        &settings,
+        &mut ws,
+        None::<&hirad_core::visibility::Unoccluded>,
+        &mut exec,
+        &mut NoProgress,
+        &mut hr,
+    )
+    .unwrap();
+    let want = absorbed(&hr);
+    let total = |a: &[[f64; 2]], b: usize| a.iter().map(|x| x[b]).sum::<f64>();
+    // (bits: twig 1, branch 2; levels solved, deepest level, closed instances)
+    for (bits, levels, deepest, closed) in [
+        (0b00u8, 26u64, 2u32, 25u64),
+        (0b01, 6, 1, 5),
+        (0b10, 21, 1, 20),
+        (0b11, 1, 0, 0),
+    ] {
+        let mut hi = ResultsTable::new(2, true);
+        let stats: Stats = hirad_core::hr::solve_hi(
+            &view,
+            &settings,
+            Inline::new(&[bits]),
+            &mut ws,
+            &mut exec,
+            &mut NoProgress,
+            &mut hi,
+        )
+        .unwrap();
+        let case = format!("expanded in place {bits:02b}");
+        assert_eq!(hi.ids, (0..105).collect::<Vec<u64>>(), "{case}");
+        assert_eq!(
+            (stats.levels, stats.level_depth, stats.closed_instances),
+            (levels, deepest, closed),
+            "{case}"
+        );
+        let got = absorbed(&hi);
+        for b in 0..2 {
+            let (g, w) = (total(&got, b), total(&want, b));
+            assert!((g / w - 1.0).abs() < 0.02, "{case} band {b}: {g} vs {w}");
+        }
+        // Per polygon, on the polygons that absorb a share worth comparing.
+        let big = total(&want, 1) / 105.0 * 0.1;
+        let mut errs: Vec<f64> = (0..105)
+            .filter(|&p| want[p][1] > big)
+            .map(|p| (got[p][1] / want[p][1] - 1.0).abs())
+            .collect();
+        errs.sort_by(f64::total_cmp);
+        let median = errs[errs.len() / 2];
+        let p90 = errs[errs.len() * 9 / 10];
+        eprintln!("{case}: NIR per polygon median {median:.4} p90 {p90:.4}");
+        assert!(
+            median < 0.03 && p90 < 0.12,
+            "{case}: median {median} p90 {p90}"
+        );
+        if bits == 0b11 {
+            // Nothing closed: one level, the whole scene, solved as hr solves it.
+            assert!(hi == hr, "{case}: not hr's results");
+        }
+    }
+}
+
+#[test]
+fn every_n_and_auto_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = plant_image(dir.path());
+    let image = dir.path().join("plant_tables.hirb");
+    std::fs::write(&image, &bytes).unwrap();
+    let run = |policy: &str, stats: &std::path::Path| {
+        let out = hirad(&[
+            "solve",
+            s(&image),
+            "--method",
+            "hi",
+            "--instancing",
+            policy,
+            "--stats",
+            s(stats),
+        ]);
+        assert!(
+            out.status.success(),
+            "{policy}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
+        (String::from_utf8_lossy(&out.stderr).to_string(), v)
+    };
+    // every:2: the branches closed, the twigs (depth 2) expanded in the branches' levels.
+    let (err, v) = run("every:2", &dir.path().join("every2.json"));
+    assert!(
+        err.contains("twig: expanded in place") && err.contains("branch: closed"),
+        "{err}"
+    );
+    assert_eq!(v["settings"]["instancing"], "every:2", "{v}");
+    assert_eq!(v["levels"]["solved"], 6, "{v}");
+    assert_eq!(v["levels"]["closed_instances"], 5, "{v}");
+    // auto: both small, both have tables: closed, as all.
+    let (err, v) = run("auto", &dir.path().join("auto.json"));
+    assert!(
+        err.contains("branch: closed") && err.contains("the scene has its tables"),
+        "{err}"
+    );
+    assert_eq!(v["levels"]["solved"], 26, "{v}");
+    let bad = fails_with(
+        2,
+        &[
+            "solve",
+            s(&image),
+            "--method",
+            "hi",
+            "--instancing",
+            "every:0",
+        ],
+    );
+    assert!(bad.contains("every:N"), "{bad}");
+}
+
+/// A floor under two instanced lamps (an emitting original) and four instanced crates.
+fn lamp_room() -> String {
+    let mut t = String::from(
+        "hirad 1\nbands grey\nmaterial white rho 0.6\nmaterial bulb rho 0.5 emit 300\n\
+         original lamp {\n  v -0.15 -0.15 0\n  v -0.15 0.15 0\n  v 0.15 0.15 0\n  v 0.15 -0.15 0\n  quad bulb 0 1 2 3\n}\n\
+         original crate {\n",
+    );
+    // A box of 0.4 m, faces outwards.
+    let c = [
+        [-0.2, -0.2, 0.0],
+        [0.2, -0.2, 0.0],
+        [0.2, 0.2, 0.0],
+        [-0.2, 0.2, 0.0],
+        [-0.2, -0.2, 0.4],
+        [0.2, -0.2, 0.4],
+        [0.2, 0.2, 0.4],
+        [-0.2, 0.2, 0.4],
+    ];
+    for v in c {
+        t.push_str(&format!("  v {} {} {}\n", v[0], v[1], v[2]));
+    }
+    for q in [
+        [0, 3, 2, 1],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+    ] {
+        t.push_str(&format!(
+            "  quad white {} {} {} {}\n",
+            q[0], q[1], q[2], q[3]
+        ));
+    }
+    t.push_str("}\n");
+    t.push_str("scene {\n  v -2 -2 0\n  v 2 -2 0\n  v 2 2 0\n  v -2 2 0\n  quad white 0 1 2 3\n");
+    for (x, y) in [(-0.8, 0.0), (0.8, 0.0)] {
+        t.push_str(&format!("  instance lamp exact translate {x} {y} 1.5\n"));
+    }
+    for (x, y) in [(-0.9, -0.9), (0.9, -0.9), (-0.9, 0.9), (0.9, 0.9)] {
+        t.push_str(&format!("  instance crate exact translate {x} {y} 0\n"));
+    }
+    t.push_str("}\n");
+    t
+}
+
+#[test]
+fn an_emitting_original_is_expanded_in_place_never_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("lamps.hir");
+    std::fs::write(&scene, lamp_room()).unwrap();
+    let cache = dir.path().join("cache");
+    for policy in ["all", "every:1"] {
+        let err = fails_with(
+            2,
+            &["solve", s(&scene), "--method", "hi", "--instancing", policy],
+        );
+        assert!(err.contains("'lamp', which emit light"), "{policy}: {err}");
+    }
+    let (hi, hr) = (dir.path().join("hi.csv"), dir.path().join("hr.csv"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
+        .args([
+            "solve",
+            s(&scene),
+            "--method",
+            "hi",
+            "--table-max-side",
+            "8",
+            "--results",
+            s(&hi),
+        ])
+        .env("HIRAD_CACHE", &cache)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    // Coarse tables miss their targets: a warning, the solve goes on.
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("lamp: expanded in place") && err.contains("emits light"),
+        "{err}"
+    );
+    assert!(err.contains("crate: closed"), "{err}");
+    let out = hirad(&["solve", s(&scene), "--results", s(&hr), "-q"]);
+    assert!(out.status.success());
+    // The floor (id 0) and the lamps (ids 1, 2) against hr: the lamps' light is all there.
+    let rows = |p: &std::path::Path| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').filter_map(|f| f.parse::<f64>().ok()).collect())
+            .collect()
+    };
+    let (a, b) = (rows(&hi), rows(&hr));
+    assert_eq!(a.len(), b.len());
+    assert_eq!(a.len(), 3 + 4 * 6);
+    // Columns: id, area, irradiance, radiosity (one band, one-sided).
+    for p in 0..3 {
+        let (g, w) = (a[p][2], b[p][2]);
+        assert!(
+            w > 0.0 && (g / w - 1.0).abs() < 0.03,
+            "polygon {p}: {g} vs {w}"
+        );
+    }
+}
