@@ -202,13 +202,28 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     // Any thread count gives the same bytes (the levels and their chunks are handed out in
     // a fixed order).
     let hi_bytes = std::fs::read(&hi).unwrap();
+    // With more than one thread, sibling instances open together, each in its own part of
+    // the workspace (the plant's branches two at a time, their twigs as their own levels).
     for threads in ["1", "2", "3"] {
         let other = dir.path().join(format!("hi_{threads}.csv"));
-        let args = ["--method", "hi", "--threads", threads];
+        let json = dir.path().join(format!("hi_{threads}.json"));
+        let args = ["--method", "hi", "--threads", threads, "--stats", s(&json)];
         assert!(
             results_of(&image, &args, &other) == hi_bytes,
             "--threads {threads} changed the results"
         );
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let together = v["levels"]["levels_together"].as_u64().unwrap();
+        assert_eq!(v["levels"]["opened_again"], 0, "{threads}: {}", v["levels"]);
+        if threads == "1" {
+            assert_eq!(together, 0);
+        } else {
+            // 5 branches, each with its 4 twigs: 2 threads open them 2 + 2 + 1, the last
+            // alone but its twigs 2 + 2 (20 + 4 levels); 3 threads 3 + 2 (25).
+            let want = if threads == "2" { 24 } else { 25 };
+            assert_eq!(together, want, "{threads}: {}", v["levels"]);
+        }
     }
     // Every instance expanded is hr: the same bytes, and no tables needed.
     let hr_bytes = std::fs::read(&hr).unwrap();

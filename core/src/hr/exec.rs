@@ -26,6 +26,20 @@ pub trait Executor {
     fn batch(&self) -> usize {
         1
     }
+
+    /// How many jobs [`Executor::run_jobs`] runs at once (hierarchical instantiation opens
+    /// that many sibling instances together, each in its own part of the workspace).
+    fn parallelism(&self) -> usize {
+        1
+    }
+
+    /// Runs `work(k, &mut jobs[k])` for every job, in any order and possibly concurrently;
+    /// each job owns its element. The default runs them one after another.
+    fn run_jobs<T: Send>(&mut self, jobs: &mut [T], work: &(dyn Fn(usize, &mut T) + Sync)) {
+        for (k, job) in jobs.iter_mut().enumerate() {
+            work(k, job);
+        }
+    }
 }
 
 /// Runs nothing itself: the solver computes chunk after chunk in its workspace.

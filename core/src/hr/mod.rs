@@ -50,6 +50,7 @@ mod plan;
 mod polygon_light;
 mod pool;
 mod reach;
+mod recorder;
 mod records;
 mod refine;
 mod relight;

@@ -53,7 +53,7 @@ pub fn solve_hi<S, K, E, P>(
     sink: &mut K,
 ) -> Result<Stats, SolveError<K::Error>>
 where
-    S: SceneSource,
+    S: SceneSource + Sync,
     K: Sink,
     E: Executor,
     P: Progress,
@@ -88,7 +88,6 @@ where
     }
     let whole = super::census::census(view, settings.max_children, &mut rest[..need])?;
     let scene_sides = whole.polys_one_sided + 2 * whole.polys_two_sided;
-    let mut total = Stats::default();
     let origin = memo_bytes.next_multiple_of(super::layout::ALIGN);
     let root = LevelRoot {
         inline,
@@ -100,18 +99,19 @@ where
         memo,
         progress,
         sink,
-        stats: &mut total,
-        levels: 0,
+        tally: Tally::new(),
         unit_power: 0.0,
         scene_sides,
-        balance: super::balance::Balance::default(),
-        absorbed: Some([0.0; MAX_BANDS]),
     };
     level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
-    let levels = ctx.levels;
-    let mut balance = ctx.balance;
+    let Tally {
+        stats: mut total,
+        levels,
+        mut balance,
+        absorbed,
+    } = ctx.tally;
     // As hr's: absorption from the light every polygon gathered, where it gathered.
-    if let Some(a) = ctx.absorbed {
+    if let Some(a) = absorbed {
         balance.absorbed = a;
     }
     total.balance = balance;
@@ -120,25 +120,75 @@ where
     Ok(total)
 }
 
-/// What every level of a solve shares.
+/// What every level of a solve shares, and what the levels solved under it add up to.
 struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
     view: &'a SceneView<S>,
     settings: &'a Settings,
     memo: &'a [Census],
     progress: &'a mut P,
     sink: &'a mut K,
-    /// The top level's stats, with counts over all levels.
-    stats: &'a mut Stats,
-    levels: u64,
+    tally: Tally,
     /// The top level's power (W, epsilon's unit for every level).
     unit_power: f32,
     /// The whole scene's receiving sides (see `State::scene_sides`).
     scene_sides: u64,
-    /// The levels' balances so far (see `balance::Scope::Level`).
+}
+
+/// What a level and the levels opened in it add up to. Each opened instance's levels are
+/// tallied apart and added to their parent's in order, whether siblings open one at a time
+/// or together: the sums do not depend on the thread count.
+#[derive(Clone, Copy)]
+struct Tally {
+    /// The top level's stats, with counts over all levels.
+    stats: Stats,
+    levels: u64,
+    /// The levels' balances (see `balance::Scope::Level`).
     balance: super::balance::Balance,
     /// What the polygons handed out absorbed, from their gathered light (W per band); `None`
     /// once a level hands them out without a gather.
     absorbed: Option<[f64; MAX_BANDS]>,
+}
+
+impl Tally {
+    fn new() -> Self {
+        Tally {
+            stats: Stats {
+                converged: true,
+                ..Stats::default()
+            },
+            levels: 0,
+            balance: super::balance::Balance::default(),
+            absorbed: Some([0.0; MAX_BANDS]),
+        }
+    }
+
+    /// Adds the tally of an instance opened in this one's level.
+    fn add(&mut self, o: &Tally) {
+        let (t, l) = (&mut self.stats, &o.stats);
+        add_level(t, l, 0, false);
+        t.level_depth = t.level_depth.max(l.level_depth);
+        t.closed_instances += l.closed_instances;
+        t.levels_together += l.levels_together;
+        t.opened_again += l.opened_again;
+        t.largest_level = t.largest_level.max(l.largest_level);
+        for (a, b) in t.leaf_histogram.iter_mut().zip(&l.leaf_histogram) {
+            *a += b;
+        }
+        for (a, b) in t.peak_bytes_by_depth.iter_mut().zip(&l.peak_bytes_by_depth) {
+            *a = (*a).max(*b);
+        }
+        self.levels += o.levels;
+        self.balance.add(&o.balance);
+        self.absorbed = match (self.absorbed, o.absorbed) {
+            (Some(mut sum), Some(a)) => {
+                for (s, x) in sum.iter_mut().zip(a) {
+                    *s += x;
+                }
+                Some(sum)
+            }
+            _ => None,
+        };
+    }
 }
 
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
@@ -156,7 +206,7 @@ fn level<S, K, E, P>(
     depth: usize,
 ) -> Result<(), SolveError<K::Error>>
 where
-    S: SceneSource,
+    S: SceneSource + Sync,
     K: Sink,
     E: Executor,
     P: Progress,
@@ -207,7 +257,7 @@ where
     st.stats.patches = st.patches[0].len as u64 + st.patches[1].len as u64;
     st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     st.stats.emitted_power = st.power;
-    ctx.levels += 1;
+    ctx.tally.levels += 1;
     // The solve's balance is the levels' sum: each level's leaves (a closed instance is
     // counted by the level it opens into), their light escaping only out of the scene.
     {
@@ -218,23 +268,24 @@ where
         let rays = 4 * st.settings.rays;
         let scope = super::balance::Scope::Level;
         let balance = super::balance::measure(&st, ws, &vis, &mut seq, rays, scope, ctx.progress);
-        ctx.balance.add(&balance);
+        ctx.tally.balance.add(&balance);
     }
     // What its closed instances show gather rays, here and from the levels opened in it.
     super::blockers::note_radiance(&st, ws);
-    add_level(ctx.stats, &st.stats, origin, depth == 0);
-    ctx.stats.level_depth = ctx.stats.level_depth.max(depth as u32);
-    ctx.stats.closed_instances += st.instances as u64;
+    let total = &mut ctx.tally.stats;
+    add_level(total, &st.stats, origin, depth == 0);
+    total.level_depth = total.level_depth.max(depth as u32);
+    total.closed_instances += st.instances as u64;
     if depth == 0 {
         let written = super::exchange::bytes_written(&st, ws);
-        ctx.stats.top_regions = st.lay.regions(st.blocks.used, written);
+        total.top_regions = st.lay.regions(st.blocks.used, written);
     }
     let leaves = leaf_elements(&st, ws);
-    ctx.stats.largest_level = ctx.stats.largest_level.max(leaves);
-    ctx.stats.leaf_histogram[Stats::leaf_bin(leaves)] += 1;
-    let d = depth.min(ctx.stats.peak_bytes_by_depth.len() - 1);
+    total.largest_level = total.largest_level.max(leaves);
+    total.leaf_histogram[Stats::leaf_bin(leaves)] += 1;
+    let d = depth.min(total.peak_bytes_by_depth.len() - 1);
     let peak = origin as u64 + st.stats.peak_bytes;
-    ctx.stats.peak_bytes_by_depth[d] = ctx.stats.peak_bytes_by_depth[d].max(peak);
+    total.peak_bytes_by_depth[d] = total.peak_bytes_by_depth[d].max(peak);
     // The parent's part of the workspace stays as it is; children open above it.
     let used = st.lay.blocks_base + st.blocks.used as usize * st.blocks.size;
     let (mine, free) = ws.split_at_mut(used.min(ws.len()));
@@ -247,6 +298,9 @@ where
     // entered (and numbered, see `InstanceLeaf::pass`) in the same order.
     let mut stack: heapless::Vec<Walk, MAX_NODE_DEPTH> = heapless::Vec::new();
     let mut passes = 0u32;
+    // Closed instances waiting to be opened, as many together as the executor runs jobs.
+    let mut batch: heapless::Vec<Item<'_>, MAX_JOBS> = heapless::Vec::new();
+    let together = exec.parallelism().clamp(1, MAX_JOBS);
     let enter = |node: u32, pass: u32, stack: &mut heapless::Vec<Walk, MAX_NODE_DEPTH>| {
         let rec = view.node(NodeId(node))?;
         stack
@@ -283,6 +337,8 @@ where
                     node = view.original(inst.original())?.root;
                 }
             } else {
+                // Closed: opened below, together with the siblings that follow it (no own
+                // polygon between them: `pending` is empty while the batch holds any).
                 flush(
                     ctx,
                     &st,
@@ -298,34 +354,41 @@ where
                 let (node, place) = contents(view, &st, mine, leaf, i)?;
                 let count = subtree_polygons(view, node, ctx.memo)?;
                 if count > 0 {
-                    let n = beams(&st, mine, leaf, free, 0)?;
-                    let bands = st.bands;
-                    let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
-                    let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
-                    let floats: &[f32] = bytemuck::cast_slice(&b[..n * beam_floats(bands) * 4]);
-                    let child = LevelRoot {
+                    if batch.is_full() {
+                        open_batch(
+                            ctx,
+                            &st,
+                            mine,
+                            &vis,
+                            free,
+                            origin + used,
+                            exec,
+                            &batch,
+                            depth,
+                        )?;
+                        batch.clear();
+                    }
+                    let _ = batch.push(Item {
+                        leaf,
                         node,
                         place,
-                        beams: Some((floats, st.suns)),
+                        first_id: next_id,
                         inline: root.inline,
-                    };
-                    // The contents' rays go on through this level (and those it is open in).
-                    let here = super::vis::Outer {
-                        vis: &vis,
-                        st: &st,
-                        ws: mine,
-                        opened: leaf,
-                    };
-                    level(
-                        ctx,
-                        &child,
-                        Some(&here),
-                        child_ws,
-                        origin + used + bytes,
-                        &mut *exec,
-                        next_id,
-                        depth + 1,
-                    )?;
+                    });
+                    if batch.len() >= together {
+                        open_batch(
+                            ctx,
+                            &st,
+                            mine,
+                            &vis,
+                            free,
+                            origin + used,
+                            exec,
+                            &batch,
+                            depth,
+                        )?;
+                        batch.clear();
+                    }
                 }
                 next_id += count;
                 continue;
@@ -333,9 +396,36 @@ where
         }
         // The level's own polygons, in load order (its nodes depth first).
         let own = enter(node, pass_in, &mut stack)?;
+        if own > 0 && !batch.is_empty() {
+            open_batch(
+                ctx,
+                &st,
+                mine,
+                &vis,
+                free,
+                origin + used,
+                exec,
+                &batch,
+                depth,
+            )?;
+            batch.clear();
+        }
         polygon += own;
         pending += own;
         next_id += own as u64;
+    }
+    if !batch.is_empty() {
+        open_batch(
+            ctx,
+            &st,
+            mine,
+            &vis,
+            free,
+            origin + used,
+            exec,
+            &batch,
+            depth,
+        )?;
     }
     flush(
         ctx,
@@ -349,6 +439,216 @@ where
         next_id,
     )?;
     Ok(())
+}
+
+/// Most sibling instances opened together.
+const MAX_JOBS: usize = 16;
+
+/// A closed instance to open: its leaf, its contents (node and placement) and their first
+/// polygon's global id.
+#[derive(Clone, Copy)]
+struct Item<'b> {
+    leaf: u32,
+    node: u32,
+    place: Similarity,
+    first_id: u64,
+    inline: Inline<'b>,
+}
+
+/// How an instance opened as a job went.
+#[derive(Clone, Copy)]
+enum Outcome {
+    /// Solved; its results are recorded in its part.
+    Done,
+    /// Its part was too small (for its levels, or for the record of its results): opened
+    /// again after the others, in the whole free workspace, as alone.
+    Again,
+    /// It failed.
+    Failed(HrError),
+}
+
+/// A sibling instance opened in its own part of the workspace.
+struct Job<'w, 'b> {
+    part: &'w mut [u8],
+    /// Where the part starts in the caller's workspace (bytes).
+    origin: usize,
+    item: Item<'b>,
+    tally: Tally,
+    recorded: usize,
+    outcome: Outcome,
+}
+
+/// Opens the closed instances `items` (siblings in the level `st`, in global-id order, in
+/// `free`, which starts `origin` bytes into the caller's workspace). More than one: each in
+/// its own part of `free`, as jobs of the executor (concurrently if it runs them so), each
+/// solved as alone with its results recorded, then handed on in order; one that did not
+/// fit its part is opened again in the whole of `free`, as are the ones after it. The
+/// results, and the tallies added in order, are the same for any number of jobs.
+#[allow(clippy::too_many_arguments)]
+fn open_batch<S, K, E, P>(
+    ctx: &mut Ctx<'_, S, K, P>,
+    st: &State,
+    mine: &[u8],
+    vis: &super::vis::Vis<'_, Unoccluded>,
+    free: &mut [u8],
+    origin: usize,
+    exec: &mut E,
+    items: &[Item<'_>],
+    depth: usize,
+) -> Result<(), SolveError<K::Error>>
+where
+    S: SceneSource + Sync,
+    K: Sink,
+    E: Executor,
+    P: Progress,
+{
+    let mut again = 0;
+    if items.len() > 1 {
+        again = items.len();
+        let part = (free.len() / items.len()) & !(super::layout::ALIGN - 1);
+        let mut jobs: heapless::Vec<Job<'_, '_>, MAX_JOBS> = heapless::Vec::new();
+        let mut rest = &mut *free;
+        for (k, item) in items.iter().enumerate() {
+            let at = part.min(rest.len());
+            let (p, r) = core::mem::take(&mut rest).split_at_mut(at);
+            rest = r;
+            let _ = jobs.push(Job {
+                part: p,
+                origin: origin + k * part,
+                item: *item,
+                tally: Tally::new(),
+                recorded: 0,
+                outcome: Outcome::Again,
+            });
+        }
+        let (view, settings, memo) = (ctx.view, ctx.settings, ctx.memo);
+        let (unit_power, scene_sides) = (ctx.unit_power, ctx.scene_sides);
+        let work = |_: usize, job: &mut Job<'_, '_>| {
+            // Half the part records what the contents hand out (each polygon and its leaf
+            // patches, see `recorder`; pages untouched cost nothing), half solves them.
+            let record = (job.part.len() / 2) & !(super::layout::ALIGN - 1);
+            let (rec, ws) = job.part.split_at_mut(record);
+            let Ok(words) = bytemuck::try_cast_slice_mut::<u8, u32>(rec) else {
+                return;
+            };
+            let mut recorder = super::recorder::Recorder::new(words);
+            let mut progress = super::exec::NoProgress;
+            let mut sub = Ctx {
+                view,
+                settings,
+                memo,
+                progress: &mut progress,
+                sink: &mut recorder,
+                tally: Tally::new(),
+                unit_power,
+                scene_sides,
+            };
+            let origin = job.origin + record;
+            let r = open_child(
+                &mut sub,
+                st,
+                mine,
+                vis,
+                &job.item,
+                ws,
+                origin,
+                &mut super::exec::Sequential,
+                depth,
+            );
+            job.tally = sub.tally;
+            job.recorded = recorder.len();
+            job.outcome = match r {
+                Ok(()) if !job.tally.stats.budget_limited => Outcome::Done,
+                Ok(()) => Outcome::Again,
+                Err(SolveError::Sink(_)) => Outcome::Again,
+                Err(SolveError::Hr(HrError::WorkspaceTooSmall { .. })) => Outcome::Again,
+                Err(SolveError::Hr(e)) => Outcome::Failed(e),
+            };
+        };
+        exec.run_jobs(&mut jobs, &work);
+        for (k, job) in jobs.iter().enumerate() {
+            match job.outcome {
+                Outcome::Failed(e) => return Err(e.into()),
+                Outcome::Again => {
+                    again = k;
+                    ctx.tally.stats.opened_again += (items.len() - k) as u64;
+                    break;
+                }
+                Outcome::Done => {
+                    let words: &[u32] = bytemuck::cast_slice(&job.part[..4 * job.recorded]);
+                    super::recorder::replay(words, ctx.sink).map_err(SolveError::Sink)?;
+                    ctx.tally.add(&job.tally);
+                    ctx.tally.stats.levels_together += job.tally.levels;
+                }
+            }
+        }
+    }
+    for item in &items[again..] {
+        let mut sub = Ctx {
+            view: ctx.view,
+            settings: ctx.settings,
+            memo: ctx.memo,
+            progress: &mut *ctx.progress,
+            sink: &mut *ctx.sink,
+            tally: Tally::new(),
+            unit_power: ctx.unit_power,
+            scene_sides: ctx.scene_sides,
+        };
+        open_child(&mut sub, st, mine, vis, item, free, origin, exec, depth)?;
+        let t = sub.tally;
+        ctx.tally.add(&t);
+    }
+    Ok(())
+}
+
+/// Opens closed instance `item` of level `st` (at `depth`): its beams into `free`, then its
+/// contents as the next level above them.
+#[allow(clippy::too_many_arguments)]
+fn open_child<S, K, E, P>(
+    ctx: &mut Ctx<'_, S, K, P>,
+    st: &State,
+    mine: &[u8],
+    vis: &super::vis::Vis<'_, Unoccluded>,
+    item: &Item<'_>,
+    free: &mut [u8],
+    origin: usize,
+    exec: &mut E,
+    depth: usize,
+) -> Result<(), SolveError<K::Error>>
+where
+    S: SceneSource + Sync,
+    K: Sink,
+    E: Executor,
+    P: Progress,
+{
+    let n = beams(st, mine, item.leaf, free, 0)?;
+    let bands = st.bands;
+    let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
+    let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
+    let floats: &[f32] = bytemuck::cast_slice(&b[..n * beam_floats(bands) * 4]);
+    let child = LevelRoot {
+        node: item.node,
+        place: item.place,
+        beams: Some((floats, st.suns)),
+        inline: item.inline,
+    };
+    // The contents' rays go on through this level (and those it is open in).
+    let here = super::vis::Outer {
+        vis,
+        st,
+        ws: mine,
+        opened: item.leaf,
+    };
+    level(
+        ctx,
+        &child,
+        Some(&here),
+        child_ws,
+        origin + bytes,
+        exec,
+        item.first_id,
+        depth + 1,
+    )
 }
 
 /// Hands the `pending` level polygons before `polygon` to the sink, the last of them with
@@ -393,7 +693,7 @@ where
         id_offset,
     )
     .map_err(SolveError::Sink)?;
-    ctx.absorbed = match (ctx.absorbed, written.absorbed) {
+    ctx.tally.absorbed = match (ctx.tally.absorbed, written.absorbed) {
         (Some(mut sum), Some(a)) => {
             for (s, x) in sum.iter_mut().zip(a) {
                 *s += x;

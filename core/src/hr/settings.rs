@@ -224,6 +224,12 @@ pub struct Stats {
     pub level_depth: u32,
     /// Closed instances over all levels.
     pub closed_instances: u64,
+    /// Levels solved in jobs beside their siblings' (see [`super::Executor::run_jobs`]),
+    /// the levels opened inside them included.
+    pub levels_together: u64,
+    /// Instances opened again alone after their job's part of the workspace proved too
+    /// small.
+    pub opened_again: u64,
     /// The most leaf elements (leaf patches and closed instances) of one level.
     pub largest_level: u64,
     /// Levels by their leaf elements (leaf patches and closed instances: what one local

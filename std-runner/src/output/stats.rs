@@ -132,6 +132,13 @@ pub struct Levels {
     pub deepest: u32,
     /// Closed instances over all levels.
     pub closed_instances: u64,
+    /// Levels solved in jobs beside their siblings' (opened together, one per thread).
+    #[serde(default)]
+    pub levels_together: u64,
+    /// Instances opened again alone after their job's part of the workspace proved too
+    /// small.
+    #[serde(default)]
+    pub opened_again: u64,
     /// The most leaf elements (leaf patches and closed instances) one level held.
     #[serde(alias = "largest_level_patches")]
     pub largest_level_leaves: u64,
@@ -215,6 +222,8 @@ impl Levels {
             solved: s.levels,
             deepest: s.level_depth,
             closed_instances: s.closed_instances,
+            levels_together: s.levels_together,
+            opened_again: s.opened_again,
             largest_level_leaves: s.largest_level,
             leaf_histogram,
             peak_workspace_bytes_by_depth: s.peak_bytes_by_depth[..depths].to_vec(),
@@ -474,9 +483,11 @@ impl SolveReport {
                 .collect();
             writeln!(
                 out,
-                "  levels: {} solved (deepest {}), {} closed instances; levels by leaf elements {}; peak workspace by depth {}",
+                "  levels: {} solved (deepest {}; {} of them beside their siblings', {} opened again alone), {} closed instances; levels by leaf elements {}; peak workspace by depth {}",
                 l.solved,
                 l.deepest,
+                l.levels_together,
+                l.opened_again,
                 l.closed_instances,
                 bins.join(", "),
                 peaks.join(", ")

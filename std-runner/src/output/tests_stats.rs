@@ -92,6 +92,8 @@ fn report() -> SolveReport {
             solved: 26,
             deepest: 2,
             closed_instances: 25,
+            levels_together: 20,
+            opened_again: 1,
             largest_level_leaves: 1652,
             leaf_histogram: vec![super::LeafBin {
                 leaves_from: 8,

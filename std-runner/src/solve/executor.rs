@@ -115,6 +115,25 @@ impl Executor for RayonExecutor {
         &self.outputs[chunk - self.first]
     }
 
+    fn parallelism(&self) -> usize {
+        self.threads()
+    }
+
+    fn run_jobs<T: Send>(&mut self, jobs: &mut [T], work: &(dyn Fn(usize, &mut T) + Sync)) {
+        match &self.pool {
+            Some(pool) if jobs.len() > 1 => pool.install(|| {
+                jobs.par_iter_mut()
+                    .enumerate()
+                    .for_each(|(k, job)| work(k, job));
+            }),
+            _ => {
+                for (k, job) in jobs.iter_mut().enumerate() {
+                    work(k, job);
+                }
+            }
+        }
+    }
+
     fn batch(&self) -> usize {
         self.batch
     }

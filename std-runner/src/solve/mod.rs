@@ -197,7 +197,7 @@ pub fn solve_hi<K: Sink<Error = anyhow::Error>>(
 /// `files::FileSource`): the tables are read into the workspace once, and no other copy of
 /// them is held.
 #[allow(clippy::too_many_arguments)]
-pub fn solve_hi_image<S: SceneSource, K: Sink<Error = anyhow::Error>>(
+pub fn solve_hi_image<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     view: &SceneView<S>,
     settings: &Settings,
     inline: Inline<'_>,
@@ -251,7 +251,7 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
 
 /// Solves the scene image `view` (`scene`, its model, for a caller's ray caster).
 #[allow(clippy::too_many_arguments)]
-fn run_view<S: SceneSource, K: Sink<Error = anyhow::Error>>(
+fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     view: &SceneView<S>,
     scene: Option<&Scene>,
     settings: &Settings,
