@@ -17,6 +17,7 @@
 //! applied in order, so results are bit-identical for any number of threads.
 
 mod balance;
+mod beams;
 mod bins;
 mod blockers;
 mod census;
@@ -59,8 +60,10 @@ mod run;
 mod sample;
 mod settings;
 mod shoot;
+mod siblings;
 mod solve;
 mod state;
+mod tally;
 mod vis;
 
 pub use balance::Balance;

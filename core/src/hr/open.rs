@@ -22,21 +22,18 @@ use super::census::{Census, expanded_originals, subtree_polygons};
 use super::error::{HrError, SolveError};
 use super::exec::{Executor, Fallback, Progress};
 use super::ids::{Elem, Kind};
-use super::level::{LevelRoot, beam_floats};
+use super::level::LevelRoot;
 use super::run::Run;
 use super::settings::{Inline, Instancing, Settings, Stats};
+use super::siblings::{Item, MAX_JOBS, open_batch};
 use super::state::State;
+use super::tally::{Tally, add_level};
 use crate::NodeId;
 use crate::geometry::Similarity;
 use crate::image::{SceneSource, SceneView};
-use crate::limits::{MAX_BANDS, MAX_NODE_DEPTH, NONE};
+use crate::limits::{MAX_NODE_DEPTH, NONE};
 use crate::sink::Sink;
-use crate::tables::grid::DirectionGrid;
 use crate::visibility::Unoccluded;
-use glam::Vec3;
-
-/// Side of the direction grid the links into an instance are binned on (64 directions).
-const BEAM_SIDE: u32 = 8;
 
 /// Solves the scene level by level (see the module documentation) with the core's own BVH,
 /// and hands every polygon to `sink` in global-id order. Instances of the originals
@@ -121,81 +118,24 @@ where
 }
 
 /// What every level of a solve shares, and what the levels solved under it add up to.
-struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
-    view: &'a SceneView<S>,
-    settings: &'a Settings,
-    memo: &'a [Census],
-    progress: &'a mut P,
-    sink: &'a mut K,
-    tally: Tally,
+pub(super) struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
+    pub view: &'a SceneView<S>,
+    pub settings: &'a Settings,
+    pub memo: &'a [Census],
+    pub progress: &'a mut P,
+    pub sink: &'a mut K,
+    pub tally: Tally,
     /// The top level's power (W, epsilon's unit for every level).
-    unit_power: f32,
+    pub unit_power: f32,
     /// The whole scene's receiving sides (see `State::scene_sides`).
-    scene_sides: u64,
-}
-
-/// What a level and the levels opened in it add up to. Each opened instance's levels are
-/// tallied apart and added to their parent's in order, whether siblings open one at a time
-/// or together: the sums do not depend on the thread count.
-#[derive(Clone, Copy)]
-struct Tally {
-    /// The top level's stats, with counts over all levels.
-    stats: Stats,
-    levels: u64,
-    /// The levels' balances (see `balance::Scope::Level`).
-    balance: super::balance::Balance,
-    /// What the polygons handed out absorbed, from their gathered light (W per band); `None`
-    /// once a level hands them out without a gather.
-    absorbed: Option<[f64; MAX_BANDS]>,
-}
-
-impl Tally {
-    fn new() -> Self {
-        Tally {
-            stats: Stats {
-                converged: true,
-                ..Stats::default()
-            },
-            levels: 0,
-            balance: super::balance::Balance::default(),
-            absorbed: Some([0.0; MAX_BANDS]),
-        }
-    }
-
-    /// Adds the tally of an instance opened in this one's level.
-    fn add(&mut self, o: &Tally) {
-        let (t, l) = (&mut self.stats, &o.stats);
-        add_level(t, l, 0, false);
-        t.level_depth = t.level_depth.max(l.level_depth);
-        t.closed_instances += l.closed_instances;
-        t.levels_together += l.levels_together;
-        t.opened_again += l.opened_again;
-        t.largest_level = t.largest_level.max(l.largest_level);
-        for (a, b) in t.leaf_histogram.iter_mut().zip(&l.leaf_histogram) {
-            *a += b;
-        }
-        for (a, b) in t.peak_bytes_by_depth.iter_mut().zip(&l.peak_bytes_by_depth) {
-            *a = (*a).max(*b);
-        }
-        self.levels += o.levels;
-        self.balance.add(&o.balance);
-        self.absorbed = match (self.absorbed, o.absorbed) {
-            (Some(mut sum), Some(a)) => {
-                for (s, x) in sum.iter_mut().zip(a) {
-                    *s += x;
-                }
-                Some(sum)
-            }
-            _ => None,
-        };
-    }
+    pub scene_sides: u64,
 }
 
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
 /// workspace), its polygons' global ids from `first_id` on, then hands it out depth first,
 /// opening its instances.
 #[allow(clippy::too_many_arguments)]
-fn level<S, K, E, P>(
+pub(super) fn level<S, K, E, P>(
     ctx: &mut Ctx<'_, S, K, P>,
     root: &LevelRoot<'_>,
     outer: Option<&super::vis::Outer<'_>>,
@@ -441,216 +381,6 @@ where
     Ok(())
 }
 
-/// Most sibling instances opened together.
-const MAX_JOBS: usize = 16;
-
-/// A closed instance to open: its leaf, its contents (node and placement) and their first
-/// polygon's global id.
-#[derive(Clone, Copy)]
-struct Item<'b> {
-    leaf: u32,
-    node: u32,
-    place: Similarity,
-    first_id: u64,
-    inline: Inline<'b>,
-}
-
-/// How an instance opened as a job went.
-#[derive(Clone, Copy)]
-enum Outcome {
-    /// Solved; its results are recorded in its part.
-    Done,
-    /// Its part was too small (for its levels, or for the record of its results): opened
-    /// again after the others, in the whole free workspace, as alone.
-    Again,
-    /// It failed.
-    Failed(HrError),
-}
-
-/// A sibling instance opened in its own part of the workspace.
-struct Job<'w, 'b> {
-    part: &'w mut [u8],
-    /// Where the part starts in the caller's workspace (bytes).
-    origin: usize,
-    item: Item<'b>,
-    tally: Tally,
-    recorded: usize,
-    outcome: Outcome,
-}
-
-/// Opens the closed instances `items` (siblings in the level `st`, in global-id order, in
-/// `free`, which starts `origin` bytes into the caller's workspace). More than one: each in
-/// its own part of `free`, as jobs of the executor (concurrently if it runs them so), each
-/// solved as alone with its results recorded, then handed on in order; one that did not
-/// fit its part is opened again in the whole of `free`, as are the ones after it. The
-/// results, and the tallies added in order, are the same for any number of jobs.
-#[allow(clippy::too_many_arguments)]
-fn open_batch<S, K, E, P>(
-    ctx: &mut Ctx<'_, S, K, P>,
-    st: &State,
-    mine: &[u8],
-    vis: &super::vis::Vis<'_, Unoccluded>,
-    free: &mut [u8],
-    origin: usize,
-    exec: &mut E,
-    items: &[Item<'_>],
-    depth: usize,
-) -> Result<(), SolveError<K::Error>>
-where
-    S: SceneSource + Sync,
-    K: Sink,
-    E: Executor,
-    P: Progress,
-{
-    let mut again = 0;
-    if items.len() > 1 {
-        again = items.len();
-        let part = (free.len() / items.len()) & !(super::layout::ALIGN - 1);
-        let mut jobs: heapless::Vec<Job<'_, '_>, MAX_JOBS> = heapless::Vec::new();
-        let mut rest = &mut *free;
-        for (k, item) in items.iter().enumerate() {
-            let at = part.min(rest.len());
-            let (p, r) = core::mem::take(&mut rest).split_at_mut(at);
-            rest = r;
-            let _ = jobs.push(Job {
-                part: p,
-                origin: origin + k * part,
-                item: *item,
-                tally: Tally::new(),
-                recorded: 0,
-                outcome: Outcome::Again,
-            });
-        }
-        let (view, settings, memo) = (ctx.view, ctx.settings, ctx.memo);
-        let (unit_power, scene_sides) = (ctx.unit_power, ctx.scene_sides);
-        let work = |_: usize, job: &mut Job<'_, '_>| {
-            // Half the part records what the contents hand out (each polygon and its leaf
-            // patches, see `recorder`; pages untouched cost nothing), half solves them.
-            let record = (job.part.len() / 2) & !(super::layout::ALIGN - 1);
-            let (rec, ws) = job.part.split_at_mut(record);
-            let Ok(words) = bytemuck::try_cast_slice_mut::<u8, u32>(rec) else {
-                return;
-            };
-            let mut recorder = super::recorder::Recorder::new(words);
-            let mut progress = super::exec::NoProgress;
-            let mut sub = Ctx {
-                view,
-                settings,
-                memo,
-                progress: &mut progress,
-                sink: &mut recorder,
-                tally: Tally::new(),
-                unit_power,
-                scene_sides,
-            };
-            let origin = job.origin + record;
-            let r = open_child(
-                &mut sub,
-                st,
-                mine,
-                vis,
-                &job.item,
-                ws,
-                origin,
-                &mut super::exec::Sequential,
-                depth,
-            );
-            job.tally = sub.tally;
-            job.recorded = recorder.len();
-            job.outcome = match r {
-                Ok(()) if !job.tally.stats.budget_limited => Outcome::Done,
-                Ok(()) => Outcome::Again,
-                Err(SolveError::Sink(_)) => Outcome::Again,
-                Err(SolveError::Hr(HrError::WorkspaceTooSmall { .. })) => Outcome::Again,
-                Err(SolveError::Hr(e)) => Outcome::Failed(e),
-            };
-        };
-        exec.run_jobs(&mut jobs, &work);
-        for (k, job) in jobs.iter().enumerate() {
-            match job.outcome {
-                Outcome::Failed(e) => return Err(e.into()),
-                Outcome::Again => {
-                    again = k;
-                    ctx.tally.stats.opened_again += (items.len() - k) as u64;
-                    break;
-                }
-                Outcome::Done => {
-                    let words: &[u32] = bytemuck::cast_slice(&job.part[..4 * job.recorded]);
-                    super::recorder::replay(words, ctx.sink).map_err(SolveError::Sink)?;
-                    ctx.tally.add(&job.tally);
-                    ctx.tally.stats.levels_together += job.tally.levels;
-                }
-            }
-        }
-    }
-    for item in &items[again..] {
-        let mut sub = Ctx {
-            view: ctx.view,
-            settings: ctx.settings,
-            memo: ctx.memo,
-            progress: &mut *ctx.progress,
-            sink: &mut *ctx.sink,
-            tally: Tally::new(),
-            unit_power: ctx.unit_power,
-            scene_sides: ctx.scene_sides,
-        };
-        open_child(&mut sub, st, mine, vis, item, free, origin, exec, depth)?;
-        let t = sub.tally;
-        ctx.tally.add(&t);
-    }
-    Ok(())
-}
-
-/// Opens closed instance `item` of level `st` (at `depth`): its beams into `free`, then its
-/// contents as the next level above them.
-#[allow(clippy::too_many_arguments)]
-fn open_child<S, K, E, P>(
-    ctx: &mut Ctx<'_, S, K, P>,
-    st: &State,
-    mine: &[u8],
-    vis: &super::vis::Vis<'_, Unoccluded>,
-    item: &Item<'_>,
-    free: &mut [u8],
-    origin: usize,
-    exec: &mut E,
-    depth: usize,
-) -> Result<(), SolveError<K::Error>>
-where
-    S: SceneSource + Sync,
-    K: Sink,
-    E: Executor,
-    P: Progress,
-{
-    let n = beams(st, mine, item.leaf, free, 0)?;
-    let bands = st.bands;
-    let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
-    let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
-    let floats: &[f32] = bytemuck::cast_slice(&b[..n * beam_floats(bands) * 4]);
-    let child = LevelRoot {
-        node: item.node,
-        place: item.place,
-        beams: Some((floats, st.suns)),
-        inline: item.inline,
-    };
-    // The contents' rays go on through this level (and those it is open in).
-    let here = super::vis::Outer {
-        vis,
-        st,
-        ws: mine,
-        opened: item.leaf,
-    };
-    level(
-        ctx,
-        &child,
-        Some(&here),
-        child_ws,
-        origin + bytes,
-        exec,
-        item.first_id,
-        depth + 1,
-    )
-}
-
 /// Hands the `pending` level polygons before `polygon` to the sink, the last of them with
 /// global id `next_id - 1`.
 #[allow(clippy::too_many_arguments)]
@@ -753,103 +483,6 @@ fn contents<S: SceneSource>(
     }
 }
 
-/// Writes into `out` (from byte `at`) the beams that light closed instance `leaf`'s
-/// contents: every source of the level as it reached the instance, then the links it
-/// received binned by direction; returns how many.
-fn beams(st: &State, ws: &[u8], leaf: u32, out: &mut [u8], at: usize) -> Result<usize, HrError> {
-    let nb = st.bands;
-    let stride = beam_floats(nb);
-    let grid = DirectionGrid::new(BEAM_SIDE).map_err(|_| HrError::SceneTooLarge)?;
-    let cells = grid.cells() as usize;
-    let n_max = st.sources as usize + cells;
-    let need = at + 4 * n_max * stride;
-    if out.len() < need {
-        return Err(HrError::WorkspaceTooSmall {
-            needed: need as u64,
-        });
-    }
-    let floats: &mut [f32] = bytemuck::cast_slice_mut(&mut out[at..need]);
-    let mut n = 0usize;
-    for k in 0..st.sources {
-        let src = Elem::new(Kind::Source, k);
-        let super::state::Shape::Source { towards } = st.shape(ws, src) else {
-            continue;
-        };
-        // Whole: the contents' own rays find what shades them in this level, and on
-        // through the levels this one's rays go through for this source.
-        let rec: super::records::Source = super::pool::read(ws, st.at(ws, src));
-        let outer = if rec.outer == NONE {
-            NONE
-        } else {
-            rec.outer + 1
-        };
-        let b = &mut floats[n * stride..(n + 1) * stride];
-        b[..3].copy_from_slice(&towards.to_array());
-        b[3] = f32::from_bits(outer);
-        if let Some(irr) = st.b(ws, src, 0) {
-            b[4..].copy_from_slice(irr);
-        }
-        n += 1;
-    }
-    // The links: per cell of the grid, the flux density and its mean direction.
-    let mut sum = [[0.0f32; MAX_BANDS]; (BEAM_SIDE * BEAM_SIDE) as usize];
-    let mut dir = [Vec3::ZERO; (BEAM_SIDE * BEAM_SIDE) as usize];
-    let at_centre = super::instance_kernel::centre_of(st, ws, leaf);
-    let mut cur = st.links_head(ws, Elem::new(Kind::Instance, leaf));
-    while cur != NONE {
-        let l = st.link(ws, cur);
-        let mut s = [0.0f32; MAX_BANDS];
-        super::instance_light::link_flux(
-            st,
-            ws,
-            cur,
-            at_centre,
-            st.lay.strides.link_k,
-            &mut s[..nb],
-        );
-        // Spread over the cone its emitter covers (see `instance_light::cone_directions`).
-        let mut dirs = [Vec3::ZERO; super::instance_light::MAX_CONE];
-        let m = super::instance_light::cone_directions(Vec3::from(l.dir), &mut dirs);
-        for &d in &dirs[..m] {
-            let c = grid.cell_of(d) as usize;
-            let w = s[..nb].iter().copied().fold(0.0f32, f32::max) / m as f32;
-            for (a, v) in sum[c].iter_mut().zip(&s[..nb]) {
-                *a += v / m as f32;
-            }
-            dir[c] += d * w;
-        }
-        cur = l.next;
-    }
-    // The light of the level's other closed instances (see `exchange`).
-    super::exchange::beams(st, ws, leaf, |d, e| {
-        let c = grid.cell_of(d) as usize;
-        let w = e.iter().copied().fold(0.0f32, f32::max);
-        for (a, v) in sum[c].iter_mut().zip(e) {
-            *a += v;
-        }
-        dir[c] += d * w;
-    });
-    for c in 0..cells {
-        if sum[c][..nb].iter().all(|&v| v <= 0.0) {
-            continue;
-        }
-        let d = if dir[c] != Vec3::ZERO {
-            dir[c].normalize()
-        } else {
-            grid.direction(c as u32)
-        };
-        // Light that came through a link was shaded on its way: the contents' rays
-        // towards it see only their own level.
-        let b = &mut floats[n * stride..(n + 1) * stride];
-        b[..3].copy_from_slice(&d.to_array());
-        b[3] = f32::from_bits(0);
-        b[4..].copy_from_slice(&sum[c][..nb]);
-        n += 1;
-    }
-    Ok(n)
-}
-
-/// Adds a level's counts to the solve's; the top level's stats stand for the solve.
 /// The leaf elements of a solved level: its leaf patches and its closed instances.
 fn leaf_elements(st: &State, ws: &[u8]) -> u64 {
     let mut n = st.instances as u64;
@@ -861,43 +494,4 @@ fn leaf_elements(st: &State, ws: &[u8]) -> u64 {
         }
     }
     n
-}
-
-fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bool) {
-    if top {
-        let keep = (
-            total.peak_bytes,
-            total.level_depth,
-            total.closed_instances,
-            total.largest_level,
-            total.leaf_histogram,
-            total.peak_bytes_by_depth,
-            total.top_regions,
-        );
-        *total = *level;
-        (
-            total.peak_bytes,
-            total.level_depth,
-            total.closed_instances,
-            total.largest_level,
-            total.leaf_histogram,
-            total.peak_bytes_by_depth,
-            total.top_regions,
-        ) = keep;
-    } else {
-        total.polygons += level.polygons;
-        total.clusters += level.clusters;
-        total.patches += level.patches;
-        total.links += level.links;
-        total.evaluations += level.evaluations;
-        total.rays += level.rays;
-        total.rays_by_phase.lighting += level.rays_by_phase.lighting;
-        total.rays_by_phase.links += level.rays_by_phase.links;
-        total.rays_by_phase.final_gather += level.rays_by_phase.final_gather;
-        total.iterations += level.iterations;
-        total.budget_limited |= level.budget_limited;
-        total.iteration_capped |= level.iteration_capped;
-        total.converged &= level.converged;
-    }
-    total.peak_bytes = total.peak_bytes.max(origin as u64 + level.peak_bytes);
 }
