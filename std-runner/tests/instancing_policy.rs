@@ -3,7 +3,8 @@
 //! twigs), every choice of originals to expand hands out every polygon once, in global-id
 //! order, solves as many levels as it leaves closed instances (plus the top), and agrees
 //! with hr as the all-closed solve does; `every:N` and `auto` from the command line; a
-//! policy that would close an emitting original is refused, and `auto` expands it.
+//! policy that would close an emitting original is refused, `auto` expands it, and `hirad
+//! tables` makes no tables for it.
 
 mod common;
 
@@ -244,6 +245,33 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
         );
         assert!(err.contains("'lamp', which emit light"), "{policy}: {err}");
     }
+    // `hirad tables` makes the tables of what the policy closes: the crate's, not the lamp's.
+    let made = dir.path().join("lamps.hirb");
+    let out = hirad(&[
+        "tables",
+        s(&scene),
+        "-o",
+        s(&made),
+        "--max-side",
+        "4",
+        "--max-tau-side",
+        "8",
+        "--max-out-side",
+        "8",
+        "--max-single-side",
+        "32",
+        "--no-cache",
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(made.exists(), "{stderr}");
+    assert!(stderr.contains("lamp: expanded in place"), "{stderr}");
+    assert!(
+        stdout.contains("crate: 6 polygons") && !stdout.contains("lamp:"),
+        "{stdout}"
+    );
     let (hi, hr) = (dir.path().join("hi.csv"), dir.path().join("hr.csv"));
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
         .args([
