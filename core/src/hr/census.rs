@@ -311,16 +311,7 @@ fn level_tree<S: SceneSource>(
         };
         if top.next >= top.end {
             let Some(mut f) = stack.pop() else { break };
-            f.acc.clusters = f
-                .acc
-                .clusters
-                .checked_add(grouping_clusters(f.children, max_children))
-                .ok_or(HrError::SceneTooLarge)?;
-            f.acc.max_children = f
-                .acc
-                .max_children
-                .max(f.children.min(u32::MAX as u64) as u32);
-            f.acc.depth += 1;
+            close(&mut f.acc, f.children, max_children)?;
             match stack.last_mut() {
                 Some(parent) => {
                     parent.children += 1;
@@ -353,6 +344,18 @@ fn level_tree<S: SceneSource>(
         push(&mut stack, node)?;
     }
     Err(HrError::SceneTooLarge)
+}
+
+/// Completes the census of a cluster with `children` child entries once its subtree is
+/// walked: its grouping levels, its widest child list, one more level of depth.
+fn close(acc: &mut Census, children: u64, max_children: u32) -> Result<(), HrError> {
+    acc.clusters = acc
+        .clusters
+        .checked_add(grouping_clusters(children, max_children))
+        .ok_or(HrError::SceneTooLarge)?;
+    acc.max_children = acc.max_children.max(children.min(u32::MAX as u64) as u32);
+    acc.depth += 1;
+    Ok(())
 }
 
 /// A cluster for node `rec` and its own polygons by sidedness.
@@ -403,16 +406,7 @@ fn tree<S: SceneSource>(
         // Close every subtree that ends after this node.
         while stack.last().is_some_and(|f| f.end == i + 1) {
             let Some(mut f) = stack.pop() else { break };
-            f.acc.clusters = f
-                .acc
-                .clusters
-                .checked_add(grouping_clusters(f.children, max_children))
-                .ok_or(HrError::SceneTooLarge)?;
-            f.acc.max_children = f
-                .acc
-                .max_children
-                .max(f.children.min(u32::MAX as u64) as u32);
-            f.acc.depth += 1;
+            close(&mut f.acc, f.children, max_children)?;
             match stack.last_mut() {
                 Some(parent) => {
                     parent.children += 1;

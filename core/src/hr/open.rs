@@ -241,6 +241,26 @@ where
     // Closed instances waiting to be opened, as many together as the executor runs jobs.
     let mut batch: heapless::Vec<Item<'_>, MAX_JOBS> = heapless::Vec::new();
     let together = exec.parallelism().clamp(1, MAX_JOBS);
+    // Opens the waiting instances, if any (before the level's next own polygons, when the
+    // batch is full, and at the end).
+    macro_rules! open_pending {
+        () => {
+            if !batch.is_empty() {
+                open_batch(
+                    ctx,
+                    &st,
+                    mine,
+                    &vis,
+                    free,
+                    origin + used,
+                    exec,
+                    &batch,
+                    depth,
+                )?;
+                batch.clear();
+            }
+        };
+    }
     let enter = |node: u32, pass: u32, stack: &mut heapless::Vec<Walk, MAX_NODE_DEPTH>| {
         let rec = view.node(NodeId(node))?;
         stack
@@ -294,20 +314,6 @@ where
                 let (node, place) = contents(view, &st, mine, leaf, i)?;
                 let count = subtree_polygons(view, node, ctx.memo)?;
                 if count > 0 {
-                    if batch.is_full() {
-                        open_batch(
-                            ctx,
-                            &st,
-                            mine,
-                            &vis,
-                            free,
-                            origin + used,
-                            exec,
-                            &batch,
-                            depth,
-                        )?;
-                        batch.clear();
-                    }
                     let _ = batch.push(Item {
                         leaf,
                         node,
@@ -316,18 +322,7 @@ where
                         inline: root.inline,
                     });
                     if batch.len() >= together {
-                        open_batch(
-                            ctx,
-                            &st,
-                            mine,
-                            &vis,
-                            free,
-                            origin + used,
-                            exec,
-                            &batch,
-                            depth,
-                        )?;
-                        batch.clear();
+                        open_pending!();
                     }
                 }
                 next_id += count;
@@ -336,37 +331,14 @@ where
         }
         // The level's own polygons, in load order (its nodes depth first).
         let own = enter(node, pass_in, &mut stack)?;
-        if own > 0 && !batch.is_empty() {
-            open_batch(
-                ctx,
-                &st,
-                mine,
-                &vis,
-                free,
-                origin + used,
-                exec,
-                &batch,
-                depth,
-            )?;
-            batch.clear();
+        if own > 0 {
+            open_pending!();
         }
         polygon += own;
         pending += own;
         next_id += own as u64;
     }
-    if !batch.is_empty() {
-        open_batch(
-            ctx,
-            &st,
-            mine,
-            &vis,
-            free,
-            origin + used,
-            exec,
-            &batch,
-            depth,
-        )?;
-    }
+    open_pending!();
     flush(
         ctx,
         &st,
