@@ -4,6 +4,7 @@
 mod convert;
 mod flatten;
 mod info;
+mod instancing;
 mod progress;
 mod solve;
 mod solve_tables;

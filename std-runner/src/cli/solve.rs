@@ -1,12 +1,13 @@
 //! `hirad solve SCENE`: radiosity of every polygon, with a results table, an image, stats and
 //! the error against a reference.
 
+use super::instancing;
 use super::verdict;
 use crate::exact::{self, ExactSettings};
 use crate::exit::{input, not_right, usage};
 use crate::files;
 use crate::output::{self, ImageSink, Outputs, Progress, ReferenceSink, ResultsFile, SolveReport};
-use crate::solve::policy::{self, Decision, Policy};
+use crate::solve::policy::{Decision, Policy};
 use crate::solve::{self, VisibilityChoice};
 use anyhow::{Context, Result, anyhow};
 use hirad_core::hr::Settings;
@@ -249,11 +250,12 @@ pub fn run(a: Args) -> Result<()> {
         && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
     // Which originals hi closes (`--instancing`), decided on the file's image where there is
     // one, else on the loaded scene's.
-    let decide = |view: &hirad_core::image::SceneView<_>, p: Policy| {
-        policy::decide(view, p).map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))
-    };
     let mut decision: Option<Decision> = match instancing {
-        Some(p) if binary_hi => Some(decide(&files::open_image(&a.scene)?, p)?),
+        Some(p) if binary_hi => Some(instancing::decide(
+            &a.scene,
+            &files::open_image(&a.scene)?,
+            p,
+        )?),
         _ => None,
     };
     let mut loaded = if binary_hi {
@@ -271,23 +273,11 @@ pub fn run(a: Args) -> Result<()> {
     if let (Some(p), None) = (instancing, &decision)
         && p != Policy::None
     {
-        let bytes = files::compile(&a.scene, &loaded.scene)?;
-        let view = crate::scene::read_image(&bytes)
-            .map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?;
-        decision = Some(
-            policy::decide(&view, p).map_err(|e| input(anyhow!("{}: {e}", a.scene.display())))?,
-        );
+        decision = Some(instancing::decide_model(&a.scene, &loaded.scene, p)?);
     }
     if let Some(d) = &decision {
-        if !a.quiet && d.originals.iter().any(|c| c.instances > 0) {
-            eprintln!("{}", d.describe());
-        }
-        if let Some(c) = d.closed_emitter() {
-            return refuse(format!(
-                "--instancing {} closes the instances of '{}', which emit light: tables carry no emission, so their light would be lost (--instancing auto expands them in place)",
-                d.policy, c.name
-            ));
-        }
+        instancing::print(d, a.quiet);
+        instancing::refuse_closed_emitter(d)?;
     }
     let progress = Progress::new(a.quiet);
     let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();

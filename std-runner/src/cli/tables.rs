@@ -4,7 +4,7 @@ use crate::files;
 use crate::output::Progress;
 
 use crate::solve::RayonExecutor;
-use crate::solve::policy::{self, Policy};
+use crate::solve::policy::Policy;
 use crate::tables::{
     Cache, CheckReport, OriginalTables, TableSettings, check, instanced_originals, obtain,
     write_bidirectional, write_directions,
@@ -164,15 +164,12 @@ pub fn run(a: Args) -> Result<()> {
     }
     // Without names, the originals the policy closes.
     let closed: Option<Vec<usize>> = if a.originals.is_empty() {
-        let policy = a.instancing.unwrap_or(Policy::Auto);
-        let bytes = files::compile(&a.scene, &scene)?;
-        let view = crate::scene::read_image(&bytes)
-            .map_err(|e| crate::exit::input(anyhow::anyhow!("{}: {e}", a.scene.display())))?;
-        let d = policy::decide(&view, policy)
-            .map_err(|e| crate::exit::input(anyhow::anyhow!("{}: {e}", a.scene.display())))?;
-        if !a.quiet && d.originals.iter().any(|c| c.instances > 0) {
-            eprintln!("{}", d.describe());
-        }
+        let d = super::instancing::decide_model(
+            &a.scene,
+            &scene,
+            a.instancing.unwrap_or(Policy::Auto),
+        )?;
+        super::instancing::print(&d, a.quiet);
         Some(d.closed().collect())
     } else {
         None
