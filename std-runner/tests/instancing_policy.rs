@@ -3,8 +3,8 @@
 //! twigs), every choice of originals to expand hands out every polygon once, in global-id
 //! order, solves as many levels as it leaves closed instances (plus the top), and agrees
 //! with hr as the all-closed solve does; `every:N` and `auto` from the command line; a
-//! policy that would close an emitting original is refused, `auto` expands it, and `hirad
-//! tables` makes no tables for it.
+//! policy that would close an emitting original is refused, `auto` expands it and originals
+//! too small for a level of their own, and `hirad tables` makes no tables for either.
 
 mod common;
 
@@ -176,13 +176,15 @@ fn every_n_and_auto_from_the_command_line() {
     assert_eq!(v["settings"]["instancing"], "every:2", "{v}");
     assert_eq!(v["levels"]["solved"], 6, "{v}");
     assert_eq!(v["levels"]["closed_instances"], 5, "{v}");
-    // auto: both small, both have tables: closed, as all.
+    // auto: the twig (4 polygons) and the branch (20), tables or not, are cheaper in place
+    // than as levels of their own: one level, hr's.
     let (err, v) = run("auto", &dir.path().join("auto.json"));
-    assert!(
-        err.contains("branch: closed") && err.contains("the scene has its tables"),
-        "{err}"
-    );
-    assert_eq!(v["levels"]["solved"], 26, "{v}");
+    for name in ["twig: expanded in place", "branch: expanded in place"] {
+        assert!(err.contains(name), "{err}");
+    }
+    assert!(err.contains("(fewer than 64)"), "{err}");
+    assert_eq!(v["levels"]["solved"], 1, "{v}");
+    assert_eq!(v["levels"]["closed_instances"], 0, "{v}");
     let bad = fails_with(
         2,
         &[
@@ -197,27 +199,20 @@ fn every_n_and_auto_from_the_command_line() {
     assert!(bad.contains("every:N"), "{bad}");
 }
 
-/// A floor under two instanced lamps (an emitting original) and four instanced crates.
-fn lamp_room() -> String {
-    let mut t = String::from(
-        "hirad 1\nbands grey\nmaterial white rho 0.6\nmaterial bulb rho 0.5 emit 300\n\
-         original lamp {\n  v -0.15 -0.15 0\n  v -0.15 0.15 0\n  v 0.15 0.15 0\n  v 0.15 -0.15 0\n  quad bulb 0 1 2 3\n}\n\
-         original crate {\n",
-    );
-    // A box of 0.4 m, faces outwards.
+/// Faces of a box of `side` m standing on the origin, outwards, each cut into n x n quads.
+fn box_quads(t: &mut String, material: &str, side: f64, n: usize) {
+    let h = side / 2.0;
     let c = [
-        [-0.2, -0.2, 0.0],
-        [0.2, -0.2, 0.0],
-        [0.2, 0.2, 0.0],
-        [-0.2, 0.2, 0.0],
-        [-0.2, -0.2, 0.4],
-        [0.2, -0.2, 0.4],
-        [0.2, 0.2, 0.4],
-        [-0.2, 0.2, 0.4],
+        [-h, -h, 0.0],
+        [h, -h, 0.0],
+        [h, h, 0.0],
+        [-h, h, 0.0],
+        [-h, -h, side],
+        [h, -h, side],
+        [h, h, side],
+        [-h, h, side],
     ];
-    for v in c {
-        t.push_str(&format!("  v {} {} {}\n", v[0], v[1], v[2]));
-    }
+    let mut v = 0;
     for q in [
         [0, 3, 2, 1],
         [4, 5, 6, 7],
@@ -226,11 +221,43 @@ fn lamp_room() -> String {
         [2, 3, 7, 6],
         [3, 0, 4, 7],
     ] {
-        t.push_str(&format!(
-            "  quad white {} {} {} {}\n",
-            q[0], q[1], q[2], q[3]
-        ));
+        let (a, b, d) = (c[q[0]], c[q[1]], c[q[3]]);
+        for j in 0..=n {
+            for i in 0..=n {
+                let (u, w) = (i as f64 / n as f64, j as f64 / n as f64);
+                let p: Vec<f64> = (0..3)
+                    .map(|k| a[k] + (b[k] - a[k]) * u + (d[k] - a[k]) * w)
+                    .collect();
+                t.push_str(&format!("  v {} {} {}\n", p[0], p[1], p[2]));
+            }
+        }
+        let at = |i: usize, j: usize| v + j * (n + 1) + i;
+        for j in 0..n {
+            for i in 0..n {
+                t.push_str(&format!(
+                    "  quad {material} {} {} {} {}\n",
+                    at(i, j),
+                    at(i + 1, j),
+                    at(i + 1, j + 1),
+                    at(i, j + 1)
+                ));
+            }
+        }
+        v += (n + 1) * (n + 1);
     }
+}
+
+/// A floor under two instanced lamps (an emitting original), four instanced crates (96
+/// polygons each) and two bricks (6).
+fn lamp_room() -> String {
+    let mut t = String::from(
+        "hirad 1\nbands grey\nmaterial white rho 0.6\nmaterial bulb rho 0.5 emit 300\n\
+         original lamp {\n  v -0.15 -0.15 0\n  v -0.15 0.15 0\n  v 0.15 0.15 0\n  v 0.15 -0.15 0\n  quad bulb 0 1 2 3\n}\n\
+         original crate {\n",
+    );
+    box_quads(&mut t, "white", 0.4, 4);
+    t.push_str("}\noriginal brick {\n");
+    box_quads(&mut t, "white", 0.1, 1);
     t.push_str("}\n");
     t.push_str("scene {\n  v -2 -2 0\n  v 2 -2 0\n  v 2 2 0\n  v -2 2 0\n  quad white 0 1 2 3\n");
     for (x, y) in [(-0.8, 0.0), (0.8, 0.0)] {
@@ -238,6 +265,9 @@ fn lamp_room() -> String {
     }
     for (x, y) in [(-0.9, -0.9), (0.9, -0.9), (-0.9, 0.9), (0.9, 0.9)] {
         t.push_str(&format!("  instance crate exact translate {x} {y} 0\n"));
+    }
+    for x in [-0.3, 0.3] {
+        t.push_str(&format!("  instance brick exact translate {x} 0.5 0\n"));
     }
     t.push_str("}\n");
     t
@@ -267,10 +297,12 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
     );
     assert!(made.exists(), "{stderr}");
     assert!(stderr.contains("lamp: expanded in place"), "{stderr}");
+    assert!(stderr.contains("brick: expanded in place"), "{stderr}");
     assert!(
-        stdout.contains("crate: 6 polygons") && !stdout.contains("lamp:"),
+        stdout.contains("crate: 96 polygons") && !stdout.contains("lamp:"),
         "{stdout}"
     );
+    assert!(!stdout.contains("brick:"), "{stdout}");
     let (hi, hr) = (dir.path().join("hi.csv"), dir.path().join("hr.csv"));
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
         .args([
@@ -294,6 +326,7 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
         "{err}"
     );
     assert!(err.contains("crate: closed"), "{err}");
+    assert!(err.contains("brick: expanded in place"), "{err}");
     let out = hirad(&["solve", s(&scene), "--results", s(&hr), "-q"]);
     assert!(out.status.success());
     // The floor (id 0) and the lamps (ids 1, 2) against hr: the lamps' light is all there.
@@ -307,7 +340,7 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
     };
     let (a, b) = (rows(&hi), rows(&hr));
     assert_eq!(a.len(), b.len());
-    assert_eq!(a.len(), 3 + 4 * 6);
+    assert_eq!(a.len(), 3 + 4 * 96 + 2 * 6);
     // Columns: id, area, irradiance, radiosity (one band, one-sided).
     for p in 0..3 {
         let (g, w) = (a[p][2], b[p][2]);

@@ -49,6 +49,8 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
         s(&plant),
         "-o",
         s(&image),
+        "--instancing",
+        "all",
         "--max-side",
         "4",
         "--max-tau-side",
@@ -74,7 +76,8 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
             "-q",
         ];
         if method == "hi" {
-            args.extend(["--stats", s(&stats)]);
+            // Every instance closed: `auto` would expand originals this small in place.
+            args.extend(["--instancing", "all", "--stats", s(&stats)]);
         }
         let out = hirad(&args);
         assert!(
@@ -207,7 +210,16 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     for threads in ["1", "2", "3"] {
         let other = dir.path().join(format!("hi_{threads}.csv"));
         let json = dir.path().join(format!("hi_{threads}.json"));
-        let args = ["--method", "hi", "--threads", threads, "--stats", s(&json)];
+        let args = [
+            "--method",
+            "hi",
+            "--instancing",
+            "all",
+            "--threads",
+            threads,
+            "--stats",
+            s(&json),
+        ];
         assert!(
             results_of(&image, &args, &other) == hi_bytes,
             "--threads {threads} changed the results"
@@ -260,6 +272,8 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
                 s(&plant),
                 "--method",
                 "hi",
+                "--instancing",
+                "all",
                 "--table-max-side",
                 "4",
                 "--results",

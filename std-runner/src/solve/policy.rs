@@ -6,8 +6,10 @@
 //! instances closed or expanded by the same rule): a level skipped, as in the paper's
 //! figure 4. `every:N` closes the instances at instancing depths 1, N + 1, 2N + 1, ...;
 //! `auto` closes every original except those whose tables could not stand for them: an
-//! original that emits light (tables carry no emission), and one the scene has no tables
-//! for whose bake would take long (more than [`AUTO_BAKE_POLYGONS`] polygons expanded).
+//! original that emits light (tables carry no emission), one too small to be worth a level
+//! of its own (fewer than [`AUTO_LEVEL_POLYGONS`] polygons expanded: exact and cheaper in
+//! its parent's level, the paper's skipped levels), and one the scene has no tables for
+//! whose bake would take long (more than [`AUTO_BAKE_POLYGONS`] polygons expanded).
 
 use anyhow::{Result, anyhow, bail};
 use hirad_core::hr::Inline;
@@ -19,6 +21,13 @@ use std::str::FromStr;
 /// expanded in place by `auto`: one hr solve of an original of 11,611 polygons takes about
 /// 22 s at the tables' epsilon, and its bake needs 80 to 1,000 of them.
 pub const AUTO_BAKE_POLYGONS: u64 = 8_000;
+
+/// Originals with fewer polygons than this once expanded are expanded in place by `auto`,
+/// tables or not: a level of its own costs a load, a census, links copied, a solve and a
+/// gather for a handful of polygons, and as a closed leaf in its parent it costs about as
+/// much as its polygons there (the paper poplar's shoot, 27 polygons, has 286,735
+/// instances in the paper stand: that many levels, against about 15,000 without them).
+pub const AUTO_LEVEL_POLYGONS: u64 = 64;
 
 /// `--instancing`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -311,6 +320,12 @@ pub fn decide<S: SceneSource>(view: &SceneView<S>, policy: Policy) -> Result<Dec
                 false,
                 "it emits light, which tables do not carry".to_string(),
             ),
+            Policy::Auto if polygons < AUTO_LEVEL_POLYGONS => (
+                false,
+                format!(
+                    "{polygons} polygons (fewer than {AUTO_LEVEL_POLYGONS}) are cheaper in place than a level of their own"
+                ),
+            ),
             Policy::Auto if has_tables => (true, "the scene has its tables".to_string()),
             Policy::Auto if polygons > AUTO_BAKE_POLYGONS => (
                 false,
@@ -397,14 +412,17 @@ mod tests {
         assert_eq!(closed(Policy::Every(1)), both(true, true));
         assert_eq!(closed(Policy::Every(2)), both(false, true));
         assert_eq!(closed(Policy::None), both(false, false));
-        // No emission, small: auto closes both (their tables can be made).
+        // Both fewer than 64 polygons expanded: auto expands them in place.
         let auto = decide(&view, Policy::Auto).unwrap();
         assert!(
             auto.originals
                 .iter()
-                .all(|c| c.closed && !c.emits && !c.has_tables)
+                .all(|c| !c.closed && !c.emits && !c.has_tables && c.polygons < 64),
+            "{:?}",
+            auto.originals
         );
         assert!(auto.closed_emitter().is_none());
+        assert_eq!(auto.closed().count(), 0);
         // The bits for the core: set where expanded in place.
         let every2 = decide(&view, Policy::Every(2)).unwrap();
         assert!(every2.inline().expands(0) && !every2.inline().expands(1));
