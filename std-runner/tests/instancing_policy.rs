@@ -349,4 +349,42 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
             "polygon {p}: {g} vs {w}"
         );
     }
+    // A budget the floor under the lamps would fill alone at this epsilon (it failed to
+    // open the crates before the levels left room for their children): every level
+    // opened, refinement limited and said so, the floor and lamps as hr's.
+    let tight = dir.path().join("tight.csv");
+    let args = [
+        "solve",
+        s(&made),
+        "--method",
+        "hi",
+        "--epsilon",
+        "1e-4",
+        "--memory",
+        "1M",
+        "--results",
+        s(&tight),
+    ];
+    let out = hirad(&args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("budget limited refinement"), "{err}");
+    let a = rows(&tight);
+    assert_eq!(a.len(), b.len());
+    for p in 0..3 {
+        let (g, w) = (a[p][2], b[p][2]);
+        assert!((g / w - 1.0).abs() < 0.03, "1M, polygon {p}: {g} vs {w}");
+    }
+    // Less than the top level and one path of levels need at their least: refused, with
+    // at least the bytes it lacks, more than were given.
+    let mut small = args;
+    small[7] = "200K";
+    let err = fails_with(2, &small);
+    let needed: u64 = err
+        .split("it needs ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{err}"));
+    assert!(needed > 200 * 1024, "{err}");
 }

@@ -218,6 +218,15 @@ pub(crate) fn census_at<S: SceneSource>(
     Ok(c)
 }
 
+/// The originals with closed instances in the level [`census_at`] last counted with
+/// `scratch` (one bit each, as [`Inline`]).
+pub(crate) fn closed_bits<'s, S: SceneSource>(view: &SceneView<S>, scratch: &'s [u8]) -> &'s [u8] {
+    let info = view.info();
+    let at = info.originals as usize * core::mem::size_of::<Census>()
+        + (info.materials as usize).div_ceil(8);
+    &scratch[at..at + (info.originals as usize).div_ceil(8)]
+}
+
 /// Every original's expanded census, into `memo` (one per original, in order).
 pub(crate) fn expanded_originals<S: SceneSource>(
     view: &SceneView<S>,

@@ -2,6 +2,7 @@
 //! or an opened instance's contents, placed, under the light that reached the instance
 //! (see `open`).
 
+use super::room::Room;
 use super::settings::Inline;
 use crate::geometry::Similarity;
 use crate::image::{SceneSource, SceneView};
@@ -34,6 +35,9 @@ pub(crate) struct LevelRoot<'b> {
     /// The originals whose instances the level expands in place (the policy, the same for
     /// every level of a solve).
     pub inline: Inline<'b>,
+    /// The workspace its closed instances need to be opened, which it leaves free when it
+    /// refines (see `room`).
+    pub children: Room,
 }
 
 impl<'b> LevelRoot<'b> {
@@ -44,6 +48,7 @@ impl<'b> LevelRoot<'b> {
             place: Similarity::IDENTITY,
             beams: None,
             inline: Inline::NONE,
+            children: Room::default(),
         }
     }
 

@@ -56,6 +56,7 @@ mod records;
 mod refine;
 mod relight;
 mod rest_scale;
+mod room;
 mod run;
 mod sample;
 mod settings;

@@ -23,6 +23,7 @@ use super::error::{HrError, SolveError};
 use super::exec::{Executor, Fallback, Progress};
 use super::ids::{Elem, Kind};
 use super::level::LevelRoot;
+use super::room::Rooms;
 use super::run::Run;
 use super::settings::{Inline, Instancing, Settings, Stats};
 use super::siblings::{Item, MAX_JOBS, open_batch};
@@ -75,6 +76,25 @@ where
     };
     expanded_originals(view, memo)?;
     let memo: &[Census] = memo;
+    // Per original, the room its instances need to be opened, kept for the whole solve.
+    let rooms_bytes = originals * core::mem::size_of::<Rooms>();
+    let room_scratch = super::room::scratch_bytes(view);
+    if rest.len() < rooms_bytes.next_multiple_of(super::layout::ALIGN) + room_scratch {
+        return Err(HrError::WorkspaceTooSmall {
+            needed: (memo_bytes + rooms_bytes + room_scratch) as u64,
+        }
+        .into());
+    }
+    let (rooms, rest) = rest.split_at_mut(rooms_bytes.next_multiple_of(super::layout::ALIGN));
+    let rooms: &mut [Rooms] = if rooms_bytes == 0 {
+        &mut []
+    } else {
+        bytemuck::try_cast_slice_mut(&mut rooms[..rooms_bytes])
+            .map_err(|_| HrError::ScratchTooSmall)?
+    };
+    let (children, top_min) =
+        super::room::rooms(view, settings, inline, rooms, &mut rest[..room_scratch])?;
+    let rooms: &[Rooms] = rooms;
     // The whole scene's receiving sides (the final gather's rays are spread over them).
     let need = super::census::census_scratch_bytes(view);
     if rest.len() < need {
@@ -85,22 +105,37 @@ where
     }
     let whole = super::census::census(view, settings.max_children, &mut rest[..need])?;
     let scene_sides = whole.polys_one_sided + 2 * whole.polys_two_sided;
-    let origin = memo_bytes.next_multiple_of(super::layout::ALIGN);
+    let origin = memo_bytes.next_multiple_of(super::layout::ALIGN)
+        + rooms_bytes.next_multiple_of(super::layout::ALIGN);
     let root = LevelRoot {
         inline,
+        children,
         ..LevelRoot::scene(view)
     };
     let mut ctx = Ctx {
         view,
         settings,
         memo,
+        rooms,
         progress,
         sink,
         tally: Tally::new(),
         unit_power: 0.0,
         scene_sides,
     };
-    level(&mut ctx, &root, None, rest, origin, executor, 0, 0)?;
+    // A level that found its part too small says what it lacked there; the whole solve
+    // needs at least the top level and one path of its children, all at their least.
+    let least = (origin as u64)
+        .saturating_add(top_min)
+        .saturating_add(children.min);
+    level(&mut ctx, &root, None, rest, origin, executor, 0, 0).map_err(|e| match e {
+        SolveError::Hr(HrError::WorkspaceTooSmall { needed }) => {
+            SolveError::Hr(HrError::WorkspaceTooSmall {
+                needed: needed.max(least),
+            })
+        }
+        e => e,
+    })?;
     let Tally {
         stats: mut total,
         levels,
@@ -122,6 +157,8 @@ pub(super) struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
     pub view: &'a SceneView<S>,
     pub settings: &'a Settings,
     pub memo: &'a [Census],
+    /// Per original, the room to open its instances (see `room`).
+    pub rooms: &'a [Rooms],
     pub progress: &'a mut P,
     pub sink: &'a mut K,
     pub tally: Tally,
@@ -165,9 +202,20 @@ where
         None,
         executor,
         ctx.progress,
-    )?;
-    // Refined by the scene's threshold: the top level's power, not the contents' own.
+    )
+    .map_err(|e| at_origin(e, origin))?;
+    // Refined by the scene's threshold: the top level's power, not the contents' own; in
+    // what the workspace holds once its children's room is left free.
     run.st.unit_power = ctx.unit_power;
+    // Siblings opened side by side each take an equal part, half of it for the record of
+    // what they hand out (see `siblings`): room for twice as many.
+    let together = match run.seq.inner.parallelism().clamp(1, MAX_JOBS) as u64 {
+        1 => 1,
+        n => 2 * n,
+    };
+    let b = run.st.blocks;
+    run.st.blocks.total =
+        super::room::capped_total(b.total, b.used, b.size, root.children, together);
     run.st.scene_sides = ctx.scene_sides;
     run.rounds(ctx.progress);
     // Every level's patches relit by the final gather's rays, as hr's are: the light the
@@ -320,6 +368,7 @@ where
                         place,
                         first_id: next_id,
                         inline: root.inline,
+                        original: inst.original,
                     });
                     if batch.len() >= together {
                         open_pending!();
@@ -466,4 +515,15 @@ fn leaf_elements(st: &State, ws: &[u8]) -> u64 {
         }
     }
     n
+}
+
+/// A level's error, with a workspace it found too small counted from the start of the
+/// caller's workspace (`origin` bytes below the level's part), not from its part's.
+pub(super) fn at_origin(e: HrError, origin: usize) -> HrError {
+    match e {
+        HrError::WorkspaceTooSmall { needed } => HrError::WorkspaceTooSmall {
+            needed: needed.saturating_add(origin as u64),
+        },
+        e => e,
+    }
 }

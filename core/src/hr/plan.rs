@@ -18,6 +18,9 @@ pub struct Plan {
     /// A workspace that usually lets refinement finish at this epsilon (an estimate: the run
     /// reports whether the budget limited it).
     pub suggested_bytes: u64,
+    /// What refinement at this epsilon is estimated to take (`suggested_bytes` before its
+    /// floor of 16 MiB): the room an opened level is planned for.
+    pub estimated_bytes: u64,
     /// Bytes per patch of a one-sided / two-sided polygon.
     pub patch_bytes: [u64; 2],
     /// Bytes per link.
@@ -127,15 +130,15 @@ pub(super) fn plan_level<S: SceneSource>(
     // keep them.
     let bins = polys / 16.0 * 2.0 * st.bins as f64;
     let grow = patches * patch_avg + links * st.link as f64 + bins;
-    let suggested = (min_bytes as f64 + grow * 1.05)
-        .max(16.0 * 1024.0 * 1024.0)
-        .min(u64::MAX as f64 / 2.0) as u64;
+    let estimated = (min_bytes as f64 + grow * 1.05).min(u64::MAX as f64 / 2.0) as u64;
+    let suggested = estimated.max(16 << 20);
     let at_min = layout(min_bytes as usize).ok_or(HrError::SceneTooLarge)?;
     Ok(Plan {
         census: *c,
         static_bytes: at_min.static_bytes as u64,
         min_bytes,
         suggested_bytes: suggested.max(min_bytes),
+        estimated_bytes: estimated.max(min_bytes),
         patch_bytes: [st.patch1 as u64, st.patch2 as u64],
         link_bytes: st.link as u64,
     })

@@ -30,6 +30,8 @@ pub(super) struct Item<'b> {
     pub place: Similarity,
     pub first_id: u64,
     pub inline: Inline<'b>,
+    /// The instance's original.
+    pub original: u32,
 }
 
 /// How an instance opened as a job went.
@@ -98,7 +100,7 @@ where
                 outcome: Outcome::Again,
             });
         }
-        let (view, settings, memo) = (ctx.view, ctx.settings, ctx.memo);
+        let (view, settings, memo, rooms) = (ctx.view, ctx.settings, ctx.memo, ctx.rooms);
         let (unit_power, scene_sides) = (ctx.unit_power, ctx.scene_sides);
         let work = |_: usize, job: &mut Job<'_, '_>| {
             // Half the part records what the contents hand out (each polygon and its leaf
@@ -114,6 +116,7 @@ where
                 view,
                 settings,
                 memo,
+                rooms,
                 progress: &mut progress,
                 sink: &mut recorder,
                 tally: Tally::new(),
@@ -165,6 +168,7 @@ where
             view: ctx.view,
             settings: ctx.settings,
             memo: ctx.memo,
+            rooms: ctx.rooms,
             progress: &mut *ctx.progress,
             sink: &mut *ctx.sink,
             tally: Tally::new(),
@@ -198,7 +202,7 @@ where
     E: Executor,
     P: Progress,
 {
-    let n = beams(st, mine, item.leaf, free, 0)?;
+    let n = beams(st, mine, item.leaf, free, 0).map_err(|e| super::open::at_origin(e, origin))?;
     let bands = st.bands;
     let bytes = (n * beam_floats(bands) * 4).next_multiple_of(super::layout::ALIGN);
     let (b, child_ws) = free.split_at_mut(bytes.min(free.len()));
@@ -208,6 +212,10 @@ where
         place: item.place,
         beams: Some((floats, st.suns)),
         inline: item.inline,
+        children: ctx
+            .rooms
+            .get(item.original as usize)
+            .map_or(Default::default(), |r| r.below),
     };
     // The contents' rays go on through this level (and those it is open in).
     let here = super::vis::Outer {

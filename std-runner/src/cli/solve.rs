@@ -301,7 +301,9 @@ pub fn run(a: Args) -> Result<()> {
                 .info()
         }
     };
-    let scene = &loaded.scene;
+    // Shared with the results' row labels, which read it as the rows go by.
+    let shared = std::sync::Arc::new(loaded.scene);
+    let scene = &*shared;
     if info.expanded_polygons == 0 {
         if loaded.skipped_faces > 0 {
             return Err(input(anyhow!(
@@ -318,7 +320,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let bands = scene.bands as usize;
     // Material and group of every row; back-side columns only when a polygon is two-sided.
-    let labels = output::RowLabels::of(scene);
+    let labels = output::RowLabels::shared(std::sync::Arc::clone(&shared));
     let two_sided = labels.uses_material(|m| scene.materials[m].data.two_sided);
 
     // Outputs, checked before the (possibly long) solve: writable, none of them a file the
@@ -730,7 +732,7 @@ pub fn run(a: Args) -> Result<()> {
 
 /// Patches a `--method hi` image keeps for smooth shading at once (about 6 MB; corners are
 /// shared within a batch: the patches of a level arrive together).
-const HI_IMAGE_BATCH: usize = 1 << 16;
+const HI_IMAGE_BATCH: usize = 1 << 14;
 
 /// The image size without `--size`.
 const DEFAULT_SIZE: &str = "640x480";

@@ -32,7 +32,7 @@ pub fn field_count(bands: usize, two_sided: bool) -> usize {
 }
 
 /// What a table's columns are: its band labels and sides, and the optional columns.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TableLayout {
     /// One label per band (see [`band_labels`]).
     pub labels: Vec<String>,
@@ -300,9 +300,10 @@ impl<W: Write> Sink for ResultsWriter<W> {
                 .ok_or_else(|| invalid("face number"))?;
             let _ = write!(line, ",{f}");
         }
-        if let Some(rows) = &self.layout.rows {
-            let m = rows.material(p.id).ok_or_else(|| invalid("material"))?;
-            let g = rows.group(p.id).ok_or_else(|| invalid("group"))?;
+        if let Some(rows) = &mut self.layout.rows {
+            let (m, g) = rows
+                .label(p.id)
+                .ok_or_else(|| invalid("material or group"))?;
             line.push(',');
             push_field(line, m);
             line.push(',');

@@ -378,6 +378,7 @@ fn named_bands_units_material_and_group_columns() {
         s.root.children.push(plant);
         RowLabels::of(&s)
     };
+    let mut rows = rows;
     assert_eq!(rows.len(), 3);
     assert_eq!(rows.group(0), Some("scene"));
     assert_eq!(rows.group(1), Some("scene/plant/#0"));
