@@ -112,17 +112,15 @@ where
         children,
         ..LevelRoot::scene(view)
     };
-    let mut ctx = Ctx {
+    let shared = Shared {
         view,
         settings,
         memo,
         rooms,
-        progress,
-        sink,
-        tally: Tally::new(),
         unit_power: 0.0,
         scene_sides,
     };
+    let mut ctx = Ctx::new(shared, progress, sink);
     // A level that found its part too small says what it lacked there; the whole solve
     // needs at least the top level and one path of its children, all at their least.
     let least = (origin as u64)
@@ -152,20 +150,48 @@ where
     Ok(total)
 }
 
-/// What every level of a solve shares, and what the levels solved under it add up to.
-pub(super) struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
+/// What every level of a solve reads: the scene, the settings, and what was counted of
+/// them before the first level.
+pub(super) struct Shared<'a, S: SceneSource> {
     pub view: &'a SceneView<S>,
     pub settings: &'a Settings,
     pub memo: &'a [Census],
     /// Per original, the room to open its instances (see `room`).
     pub rooms: &'a [Rooms],
-    pub progress: &'a mut P,
-    pub sink: &'a mut K,
-    pub tally: Tally,
     /// The top level's power (W, epsilon's unit for every level).
     pub unit_power: f32,
     /// The whole scene's receiving sides (see `State::scene_sides`).
     pub scene_sides: u64,
+}
+
+// By hand: derived, they would ask the scene's source to be `Copy` too.
+impl<S: SceneSource> Clone for Shared<'_, S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<S: SceneSource> Copy for Shared<'_, S> {}
+
+/// What every level of a solve shares, where its results go, and what the levels solved
+/// under it add up to.
+pub(super) struct Ctx<'a, S: SceneSource, K: Sink, P: Progress> {
+    pub shared: Shared<'a, S>,
+    pub progress: &'a mut P,
+    pub sink: &'a mut K,
+    pub tally: Tally,
+}
+
+impl<'a, S: SceneSource, K: Sink, P: Progress> Ctx<'a, S, K, P> {
+    /// A context with nothing tallied yet.
+    pub(super) fn new(shared: Shared<'a, S>, progress: &'a mut P, sink: &'a mut K) -> Self {
+        Ctx {
+            shared,
+            progress,
+            sink,
+            tally: Tally::new(),
+        }
+    }
 }
 
 /// Solves the level `root` in `ws` (which starts `origin` bytes into the caller's
@@ -191,10 +217,10 @@ where
     if depth >= MAX_NODE_DEPTH {
         return Err(HrError::SceneTooLarge.into());
     }
-    let view = ctx.view;
+    let view = ctx.shared.view;
     let mut run = Run::<Unoccluded, E>::start(
         view,
-        ctx.settings,
+        ctx.shared.settings,
         Instancing::Top,
         root,
         outer,
@@ -206,7 +232,7 @@ where
     .map_err(|e| at_origin(e, origin))?;
     // Refined by the scene's threshold: the top level's power, not the contents' own; in
     // what the workspace holds once its children's room is left free.
-    run.st.unit_power = ctx.unit_power;
+    run.st.unit_power = ctx.shared.unit_power;
     // Siblings opened side by side each take an equal part, half of it for the record of
     // what they hand out (see `siblings`): room for twice as many.
     let together = match run.seq.inner.parallelism().clamp(1, MAX_JOBS) as u64 {
@@ -216,7 +242,7 @@ where
     let b = run.st.blocks;
     run.st.blocks.total =
         super::room::capped_total(b.total, b.used, b.size, root.children, together);
-    run.st.scene_sides = ctx.scene_sides;
+    run.st.scene_sides = ctx.shared.scene_sides;
     run.rounds(ctx.progress);
     // Every level's patches relit by the final gather's rays, as hr's are: the light the
     // closed instances send the level's polygons through links (an isotropic kernel from
@@ -231,7 +257,7 @@ where
         seq,
     } = run;
     if depth == 0 {
-        ctx.unit_power = st.power;
+        ctx.shared.unit_power = st.power;
     }
     if st.stats.diverged {
         return Err(SolveError::Hr(HrError::Diverged {
@@ -360,7 +386,7 @@ where
                 )?;
                 let leaf = find_instance(&st, mine, i, pass);
                 let (node, place) = contents(view, &st, mine, leaf, i)?;
-                let count = subtree_polygons(view, node, ctx.memo)?;
+                let count = subtree_polygons(view, node, ctx.shared.memo)?;
                 if count > 0 {
                     let _ = batch.push(Item {
                         leaf,

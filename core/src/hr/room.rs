@@ -57,7 +57,7 @@ pub(crate) struct Rooms {
 
 /// Bytes of workspace [`rooms`] needs besides its output (one [`Rooms`] per original).
 pub(crate) fn scratch_bytes<S: SceneSource>(view: &SceneView<S>) -> usize {
-    2 * Inline::bytes(view.info().originals) + census_scratch_bytes(view)
+    3 * Inline::bytes(view.info().originals) + census_scratch_bytes(view)
 }
 
 /// Fills `out` (one per original) with the rooms of the originals closed anywhere under the
@@ -79,6 +79,7 @@ pub(crate) fn rooms<S: SceneSource>(
     // The census's scratch first: it starts with records that must stay aligned.
     let (census_scratch, rest) = scratch.split_at_mut(census_scratch_bytes(view));
     let (seen, rest) = rest.split_at_mut(bits);
+    let (top_bits, rest) = rest.split_at_mut(bits);
     let mine = &mut rest[..bits];
     seen.fill(0);
     out[..n].fill(Rooms::default());
@@ -95,7 +96,8 @@ pub(crate) fn rooms<S: SceneSource>(
     };
     // The top level's closed originals start the walk.
     let top = census(info.scene_root.0, census_scratch)?;
-    seen.copy_from_slice(closed_bits(view, census_scratch));
+    top_bits.copy_from_slice(closed_bits(view, census_scratch));
+    seen.copy_from_slice(top_bits);
     let top_min = plan_level(view, settings, true, &top, info.suns + info.sky, false)?.min_bytes;
     let sources = info.suns + info.sky + PLANNED_BEAMS;
     let beams = (sources as usize * beam_floats(info.bands as usize) * 4) as u64;
@@ -133,8 +135,7 @@ pub(crate) fn rooms<S: SceneSource>(
             }
         }
         if !changed {
-            census(info.scene_root.0, census_scratch)?;
-            return Ok((widest(out, closed_bits(view, census_scratch)), top_min));
+            return Ok((widest(out, top_bits), top_min));
         }
     }
     Err(HrError::SceneTooLarge)

@@ -100,8 +100,7 @@ where
                 outcome: Outcome::Again,
             });
         }
-        let (view, settings, memo, rooms) = (ctx.view, ctx.settings, ctx.memo, ctx.rooms);
-        let (unit_power, scene_sides) = (ctx.unit_power, ctx.scene_sides);
+        let shared = ctx.shared;
         let work = |_: usize, job: &mut Job<'_, '_>| {
             // Half the part records what the contents hand out (each polygon and its leaf
             // patches, see `recorder`; pages untouched cost nothing), half solves them.
@@ -112,17 +111,7 @@ where
             };
             let mut recorder = super::recorder::Recorder::new(words);
             let mut progress = super::exec::NoProgress;
-            let mut sub = Ctx {
-                view,
-                settings,
-                memo,
-                rooms,
-                progress: &mut progress,
-                sink: &mut recorder,
-                tally: Tally::new(),
-                unit_power,
-                scene_sides,
-            };
+            let mut sub = Ctx::new(shared, &mut progress, &mut recorder);
             let origin = job.origin + record;
             let r = open_child(
                 &mut sub,
@@ -164,17 +153,7 @@ where
         }
     }
     for item in &items[again..] {
-        let mut sub = Ctx {
-            view: ctx.view,
-            settings: ctx.settings,
-            memo: ctx.memo,
-            rooms: ctx.rooms,
-            progress: &mut *ctx.progress,
-            sink: &mut *ctx.sink,
-            tally: Tally::new(),
-            unit_power: ctx.unit_power,
-            scene_sides: ctx.scene_sides,
-        };
+        let mut sub = Ctx::new(ctx.shared, &mut *ctx.progress, &mut *ctx.sink);
         open_child(&mut sub, st, mine, vis, item, free, origin, exec, depth)?;
         let t = sub.tally;
         ctx.tally.add(&t);
@@ -213,6 +192,7 @@ where
         beams: Some((floats, st.suns)),
         inline: item.inline,
         children: ctx
+            .shared
             .rooms
             .get(item.original as usize)
             .map_or(Default::default(), |r| r.below),

@@ -8,6 +8,7 @@ mod instancing;
 mod progress;
 mod solve;
 mod solve_tables;
+mod solve_view;
 mod tables;
 mod verdict;
 

@@ -319,11 +319,11 @@ pub fn run(a: Args) -> Result<()> {
     // file as it goes needs no more of it than the model's structure (the row labels, the
     // materials): its vertices go (10 MB of the paper stand's 15).
     let chosen_view = match &a.image {
-        Some(_) => Some(image_view(&a, &loaded.scene, up)?),
+        Some(_) => Some(super::solve_view::image_view(&a, &loaded.scene, up)?),
         None => None,
     };
     if image.is_some() {
-        drop_vertices(&mut loaded.scene);
+        loaded.scene.drop_vertices();
     }
     // Shared with the results' row labels, which read it as the rows go by.
     let shared = std::sync::Arc::new(loaded.scene);
@@ -716,7 +716,7 @@ pub fn run(a: Args) -> Result<()> {
 const HI_IMAGE_BATCH: usize = 1 << 14;
 
 /// The image size without `--size`.
-const DEFAULT_SIZE: &str = "640x480";
+pub(super) const DEFAULT_SIZE: &str = "640x480";
 
 /// Warns about settings that change nothing: image options without `--image`, and a
 /// refinement threshold or smallest patch that leaves nothing to refine.
@@ -789,53 +789,5 @@ fn parse_final_rays(s: &str) -> Result<u32, String> {
             "expected `auto` or a whole number of rays from 0 to {}",
             Settings::MAX_FINAL_RAYS
         )),
-    }
-}
-
-/// The image's size and camera: `--size`, then `--camera`, the scene's first camera, or the
-/// view that shows most (see `output::view`), not the backs of walls, upright
-/// (`scene::Up`: OBJ files are y up, hirad's own scenes z up).
-fn image_view(
-    a: &Args,
-    scene: &crate::scene::Scene,
-    up: crate::scene::Up,
-) -> Result<(output::Size, crate::scene::Camera)> {
-    let size = output::parse_size(a.size.as_deref().unwrap_or(DEFAULT_SIZE))
-        .map_err(|e| usage(anyhow!("{e}")))?;
-    let camera = match &a.camera {
-        Some(c) => output::parse_camera(c).map_err(|e| usage(anyhow!("{e}")))?,
-        None => match scene.cameras.first() {
-            Some(c) => {
-                if a.up.is_some() && !a.quiet {
-                    eprintln!(
-                        "warning: --up has no effect: the scene's first camera gives the view and its up"
-                    );
-                }
-                c.clone()
-            }
-            None => {
-                let c = output::view::choose(scene, &output::scene_bounds(scene), size, up)
-                    .map_err(|e| usage(anyhow!("{e}")))?;
-                if !a.quiet {
-                    eprintln!(
-                        "note: the default view, {} up: --camera {} (change it, or --up)",
-                        up.name(),
-                        output::camera_arg(&c)
-                    );
-                }
-                c
-            }
-        },
-    };
-    Ok((size, camera))
-}
-
-/// Drops the vertices of every cluster of `scene` (its tree and its originals').
-fn drop_vertices(scene: &mut crate::scene::Scene) {
-    let mut todo: Vec<&mut crate::scene::Cluster> = vec![&mut scene.root];
-    todo.extend(scene.originals.iter_mut().map(|o| &mut o.root));
-    while let Some(c) = todo.pop() {
-        c.vertices = Vec::new();
-        todo.extend(c.children.iter_mut());
     }
 }

@@ -119,6 +119,19 @@ pub struct Cluster {
     pub children: Vec<Cluster>,
 }
 
+impl Scene {
+    /// Drops the vertices of every cluster (its tree's and its originals'): what a solve
+    /// that reads the scene's image as it goes keeps of the model is its structure.
+    pub fn drop_vertices(&mut self) {
+        let mut todo: Vec<&mut Cluster> = vec![&mut self.root];
+        todo.extend(self.originals.iter_mut().map(|o| &mut o.root));
+        while let Some(c) = todo.pop() {
+            c.vertices = Vec::new();
+            todo.extend(c.children.iter_mut());
+        }
+    }
+}
+
 /// A pinhole camera.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
