@@ -711,9 +711,9 @@ pub fn run(a: Args) -> Result<()> {
     }
 }
 
-/// Patches a `--method hi` image keeps for smooth shading at once (about 6 MB; corners are
+/// Patches a `--method hi` image keeps for smooth shading at once (about 2 MB; corners are
 /// shared within a batch: the patches of a level arrive together).
-const HI_IMAGE_BATCH: usize = 1 << 14;
+const HI_IMAGE_BATCH: usize = 1 << 12;
 
 /// The image size without `--size`.
 pub(super) const DEFAULT_SIZE: &str = "640x480";
