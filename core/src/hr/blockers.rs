@@ -283,6 +283,14 @@ fn height_bin(st: &State, ws: &[u8], i: u32, q: u32) -> usize {
     ((f * HEIGHT_BINS as f32) as usize).min(HEIGHT_BINS - 1)
 }
 
+/// Notes every closed instance's factors by height slice (see [`note_profile`]): once lit,
+/// while its light is its direct light alone.
+pub(crate) fn note_profiles(st: &State, ws: &mut [u8]) {
+    for i in 0..st.instances {
+        note_profile(st, ws, i);
+    }
+}
+
 /// Notes closed instance `i`'s factors by height slice: the mean direct irradiance of suns
 /// and sky on its polygons in each slice (both sides), over that of all its polygons (1
 /// where unknown). The tables give the light scattered more than once as a mean over the
@@ -298,11 +306,8 @@ fn note_profile(st: &State, ws: &mut [u8], i: u32) {
             crate::tables::closed::Received::over(&placed, st.received(ws, i)),
             placed.tables().single(),
         ) {
-            // The direct light's values lie where the whole light's do.
-            let first = all.first_range().start;
-            let direct = |q: usize, side: usize, band: usize| {
-                st.direct_value(ws, i, first + (q * 2 + side) * nb + band)
-            };
+            // Called while its whole light is its direct light.
+            let direct = |q: usize, side: usize, band: usize| all.first_irradiance(q, side, band);
             let mut sum = [[0.0f64; crate::limits::MAX_BANDS]; HEIGHT_BINS];
             let mut area = [0.0f64; HEIGHT_BINS];
             let (mut total, mut total_area) = ([0.0f64; crate::limits::MAX_BANDS], 0.0f64);
@@ -365,7 +370,6 @@ fn shows_polygons(st: &State, ws: &[u8], i: u32) -> bool {
 /// every ray was four fifths of a canopy's gather.
 pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
-        note_profile(st, ws, i);
         let part = usize::from(shows_polygons(st, ws, i));
         let mut noted = [[0.0f32; crate::limits::MAX_BANDS]; RADIANCE_CELLS];
         let mut largest = 0.0f32;

@@ -267,7 +267,7 @@ fn closed_instance<S: SceneSource>(
     }
     Ok(Census {
         instances: 1,
-        // The direct light of suns and sky, all the light, the exchange's.
+        // All the light, the power its direct light brought, what links and the exchange handed.
         received_floats: super::state::received_parts_floats(
             t.bands as usize,
             t.scatterers as usize,

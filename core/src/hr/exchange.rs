@@ -22,7 +22,7 @@
 use super::exec::{Executor, Fallback, Progress, run_chunks};
 use super::ids::{Elem, Kind};
 use super::layout::up;
-use super::state::State;
+use super::state::{Handed, State};
 use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::{MAX_BANDS, NONE};
 use crate::sampling::{hash3, unit2};
@@ -107,7 +107,7 @@ pub(crate) fn carries(st: &State, ws: &[u8], recv: Elem, emit: Elem) -> bool {
     recv.kind() == Kind::Instance && emit.kind() == Kind::Instance && sends(st, ws, emit.index())
 }
 
-fn grid() -> DirectionGrid {
+pub(crate) fn grid() -> DirectionGrid {
     // Side 8 is a valid grid.
     DirectionGrid::new(SIDE).unwrap_or(DirectionGrid::ONE)
 }
@@ -399,9 +399,9 @@ fn entry(
 /// polygons apart the light the last [`gather`]'s rays brought to the polygons they met, as
 /// irradiance on the side met: their first scattering then starts where the light landed,
 /// not from beams (a neighbour's light reaches leaves inside the neighbour's box, which light
-/// from beyond the box would not). Straight into the whole light, after every instance's
-/// was started again from its direct light (see `instance_light::gather_instances`), so
-/// that nothing per polygon is kept apart for it.
+/// from beyond the box would not). Straight into the whole light, by the change of each
+/// emitter's escaping power since it was last landed (`Handed::Sent`), so that nothing per
+/// polygon is kept apart for it.
 pub(crate) fn land(st: &State, ws: &mut [u8]) {
     let n = st.instances;
     if n == 0 {
@@ -415,9 +415,21 @@ pub(crate) fn land(st: &State, ws: &mut [u8]) {
         if first >= last {
             continue;
         }
+        // The change of its escaping power since it was last landed.
         let mut sent = [[0.0f32; MAX_BANDS]; CELLS];
+        let mut now = [0.0f32; CELLS * MAX_BANDS];
         for (cell, v) in sent.iter_mut().enumerate() {
-            v[..nb].copy_from_slice(super::pool::floats(ws, sent_at(&p, base, j, cell, nb), nb));
+            let x = super::pool::floats(ws, sent_at(&p, base, j, cell, nb), nb);
+            let had = &st.handed(ws, j, Handed::Sent)[cell * nb..(cell + 1) * nb];
+            for (band, o) in v.iter_mut().enumerate().take(nb) {
+                *o = x[band] - had[band];
+                now[cell * nb + band] = x[band];
+            }
+        }
+        st.handed_mut(ws, j, Handed::Sent)
+            .copy_from_slice(&now[..CELLS * nb]);
+        if sent.iter().all(|v| v[..nb].iter().all(|&x| x == 0.0)) {
+            continue;
         }
         for e in first..last {
             let Some((to, _, on, power)) = entry(st, ws, &p, j, e, &sent) else {
@@ -522,36 +534,29 @@ fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 7]) -> Option<[[f32; MAX_
     Some(sent)
 }
 
-/// Adds to closed instance `i`'s whole light what the last [`gather`]
-/// handed it, beam by beam (each cell's power over its cross-section that way); where its
-/// tables keep its polygons apart, without their first scattering, which [`land`] adds
-/// from where the rays landed.
+/// Adds to closed instance `i`'s whole light what the last [`gather`] handed it, beam by
+/// beam (each cell's power over its cross-section that way), by the change since the
+/// gather before (`Handed::Exchange`); where its tables keep its polygons apart, without
+/// their first scattering, which [`land`] adds from where the rays landed.
 pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32) {
     let nb = st.bands;
     let grid = grid();
     let landed = keeps_polygons(st, ws, i);
-    for cell in 0..CELLS {
-        let mut e = [0.0f32; MAX_BANDS];
+    let placed = st.placed(ws, i);
+    let mut now = [[0.0f32; MAX_BANDS]; CELLS];
+    for (cell, e) in now.iter_mut().enumerate() {
         let power = super::pool::floats(ws, power_at(st, i, cell), nb);
         if power.iter().all(|&v| v <= 0.0) {
             continue;
         }
-        e[..nb].copy_from_slice(power);
-        let d = grid.direction(cell as u32);
-        st.with_received(ws, i, |placed, r| {
-            let s = placed.shadow(d);
-            if s > 0.0 {
-                for v in &mut e[..nb] {
-                    *v /= s;
-                }
-                if landed {
-                    r.receive_spread(placed, d, &e[..nb]);
-                } else {
-                    r.receive(placed, d, &e[..nb]);
-                }
+        let s = placed.shadow(grid.direction(cell as u32));
+        if s > 0.0 {
+            for (o, v) in e.iter_mut().zip(power) {
+                *o = v.max(0.0) / s;
             }
-        });
+        }
     }
+    super::instance_light::hand(st, ws, i, Handed::Exchange, &now, !landed);
 }
 
 /// The beams (direction towards the emitters, flux density per band, W/m^2) closed

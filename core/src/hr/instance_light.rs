@@ -8,10 +8,11 @@
 //! count.
 
 use super::blockers::SKIP_INSTANCE;
+use super::exchange::CELLS;
 use super::exec::{Executor, Fallback, Progress, run_chunks};
 use super::ids::{Elem, Kind};
 use super::layout::CHUNK;
-use super::state::State;
+use super::state::{Handed, State};
 use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::NONE;
 use crate::sampling::hash3;
@@ -192,25 +193,30 @@ pub(crate) fn light_instances<V: Visibility + ?Sized, E: Executor>(
     }
     super::polygon_light::light_polygons(st, ws, vis, ex, progress);
     note_direct(st, ws);
+    // The height profile of the direct light, while the light is the direct light alone.
+    super::blockers::note_profiles(st, ws);
 }
 
-/// Notes every closed instance's light, lit by suns and sky alone, as its direct light
-/// (what its whole light starts from again at every gather, before links add theirs).
+/// Notes every closed instance's light, lit by suns, sky and emitting polygons alone, as
+/// its direct light (see `State::note_direct`).
 pub(crate) fn note_direct(st: &State, ws: &mut [u8]) {
     for i in 0..st.instances {
         st.note_direct(ws, i);
     }
 }
 
-/// The light every closed instance receives through its links, added to its direct light
-/// as beams (each link's fluence spread over its cone, see [`cone_directions`] and
-/// `instance_kernel`). Returns the largest change of an instance's mean
+/// The light every closed instance receives through its links, added to its light as
+/// beams (each link's fluence spread over its cone, see [`cone_directions`] and
+/// `instance_kernel`), binned by direction on the exchange's grid: each cell's beam is
+/// applied by its change since the last gather (its light is kept from one gather to the
+/// next, see `State::handed`). Returns the largest change of an instance's mean
 /// radiosity (W/m^2, see `instance_kernel::mean_radiosity`) and the largest such radiosity,
 /// which the solution's convergence test takes with the patches'.
 pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
     let nb = st.bands;
     let kk = st.lay.strides.link_k;
     let (mut change, mut largest) = (0.0f32, 0.0f32);
+    let grid = super::exchange::grid();
     // What the instances send each other, from the light they hold now.
     super::exchange::gather(st, ws);
     for i in 0..st.instances {
@@ -218,8 +224,9 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
         super::exchange::set_before(st, ws, i, before);
     }
     for i in 0..st.instances {
-        start_one(st, ws, i);
         let at = super::instance_kernel::centre_of(st, ws, i);
+        // The links' light now, binned by the direction towards its emitters.
+        let mut now = [[0.0f32; crate::limits::MAX_BANDS]; CELLS];
         let mut cur = st.links_head(ws, Elem::new(Kind::Instance, i));
         while cur != NONE {
             let l = st.link(ws, cur);
@@ -227,22 +234,22 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
             link_flux(st, ws, cur, at, kk, &mut s[..nb]);
             let mut dirs = [Vec3::ZERO; MAX_CONE];
             let m = cone_directions(Vec3::from(l.dir), &mut dirs);
-            if m > 0 {
-                for v in &mut s[..nb] {
-                    *v /= m as f32;
-                }
-                st.with_received(ws, i, |placed, r| {
-                    for &d in &dirs[..m] {
-                        r.receive(placed, d, &s[..nb]);
+            for &d in &dirs[..m] {
+                for (c, w) in grid.weights(d) {
+                    if w > 0.0 {
+                        for (o, v) in now[c as usize][..nb].iter_mut().zip(&s[..nb]) {
+                            *o += w * v / m as f32;
+                        }
                     }
-                });
+                }
             }
             cur = l.next;
         }
+        hand(st, ws, i, Handed::Links, &now, true);
         super::exchange::receive(st, ws, i);
     }
     // Their first scattering where the exchange's rays landed, once every instance's light
-    // started again (it goes straight into their whole light).
+    // took its links' and beams' change.
     super::exchange::land(st, ws);
     for i in 0..st.instances {
         let after = super::instance_kernel::mean_radiosity(st, ws, i);
@@ -250,6 +257,36 @@ pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
         largest = largest.max(after);
     }
     (change, largest)
+}
+
+/// Hands closed instance `i` the beams `now` (per cell of the exchange's grid, from the
+/// cell's direction, W/m^2 per band) as `part`: its light takes each cell's change since
+/// `part` last handed it (see `Received::change`; `first` as there), and `now` is noted.
+pub(crate) fn hand(
+    st: &State,
+    ws: &mut [u8],
+    i: u32,
+    part: Handed,
+    now: &[[f32; crate::limits::MAX_BANDS]; CELLS],
+    first: bool,
+) {
+    let nb = st.bands;
+    let grid = super::exchange::grid();
+    for (c, cell) in now.iter().enumerate() {
+        let mut d = [0.0f32; crate::limits::MAX_BANDS];
+        let had = &st.handed(ws, i, part)[c * nb..(c + 1) * nb];
+        for ((o, n), h) in d.iter_mut().zip(&cell[..nb]).zip(had) {
+            *o = n - h;
+        }
+        if d[..nb].iter().all(|&x| x == 0.0) {
+            continue;
+        }
+        let towards = grid.direction(c as u32);
+        st.with_received(ws, i, |placed, r| {
+            r.change(placed, towards, &d[..nb], first)
+        });
+        st.handed_mut(ws, i, part)[c * nb..(c + 1) * nb].copy_from_slice(&cell[..nb]);
+    }
 }
 
 /// The flux density (W/m^2 per band, on a plane facing the emitter) that link `i` brings a
@@ -285,11 +322,6 @@ pub(crate) fn link_flux(st: &State, ws: &[u8], i: u32, at: Vec3, kk: usize, out:
             *o += coef * v;
         }
     }
-}
-
-/// Sets closed instance `i`'s whole light to its direct light.
-fn start_one(st: &State, ws: &mut [u8], i: u32) {
-    st.restart_from_direct(ws, i);
 }
 
 /// Most directions a link's light is spread over (see [`cone_directions`]).

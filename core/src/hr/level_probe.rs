@@ -25,35 +25,8 @@ pub struct ClosedInstance<'a> {
     pub placed: Placed<'a>,
     /// All the light it received (after loading, the direct light of suns and sky).
     pub received: &'a [f32],
-    /// The direct light of suns and sky it received, as the level keeps it.
-    pub direct: Direct<'a>,
     /// Links it receives.
     pub links: u32,
-}
-
-/// A closed instance's direct light (kept as half floats, see `State::direct_at`).
-#[derive(Clone, Copy)]
-pub struct Direct<'a> {
-    st: &'a super::state::State,
-    ws: &'a [u8],
-    i: u32,
-}
-
-impl core::fmt::Debug for Direct<'_> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("Direct")
-            .field("i", &self.i)
-            .finish_non_exhaustive()
-    }
-}
-
-impl Direct<'_> {
-    /// Its values into `out`, laid out as the whole light (`received`), as floats.
-    pub fn fill(&self, out: &mut [f32]) {
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = self.st.direct_value(self.ws, self.i, k);
-        }
-    }
 }
 
 /// What a loaded level holds.
@@ -97,11 +70,6 @@ impl Level<'_> {
             bounds: Aabb::new(Vec3::from(leaf.bbox_min), Vec3::from(leaf.bbox_max)),
             placed: self.st.placed(self.ws, i),
             received: self.st.received(self.ws, i),
-            direct: Direct {
-                st: self.st,
-                ws: self.ws,
-                i,
-            },
             links: {
                 let mut n = 0;
                 let mut cur = self.st.links_head(

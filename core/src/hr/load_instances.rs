@@ -50,7 +50,7 @@ pub(super) fn add_instance<S: SceneSource>(
         return Err(HrError::SceneTooLarge);
     }
     s.instances += 1;
-    // The direct light and all the light (see `State::received_at`).
+    // All the light and what each kind of beam handed it (see `State::received_at`).
     let received = received_floats(&record);
     if s.received_floats + received > lay.n_received_floats() {
         return Err(HrError::SceneTooLarge);

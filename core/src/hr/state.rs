@@ -10,7 +10,7 @@ use crate::limits::NONE;
 use glam::Vec3;
 
 mod instances;
-pub(crate) use instances::received_parts_floats;
+pub(crate) use instances::{Handed, received_parts_floats};
 
 /// Everything the solver knows, minus the workspace bytes (kept apart so that phases can
 /// borrow the bytes shared and a scratch buffer mutably at the same time).

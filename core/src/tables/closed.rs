@@ -409,7 +409,7 @@ impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
     /// world direction `towards` (towards the source). Non-finite or negative values and a
     /// zero direction add nothing.
     pub fn receive(&mut self, placed: &Placed<'_>, towards: Vec3, irradiance: &[f32]) {
-        self.receive_parts(placed, towards, irradiance, true);
+        self.receive_parts(placed, towards, irradiance, true, false);
     }
 
     /// [`Self::receive`] without the first scattering polygon by polygon: for a caller that
@@ -417,7 +417,15 @@ impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
     /// [`Self::add_first`] (the light between neighbours whose boxes overlap does not come
     /// from beyond the box).
     pub fn receive_spread(&mut self, placed: &Placed<'_>, towards: Vec3, irradiance: &[f32]) {
-        self.receive_parts(placed, towards, irradiance, false);
+        self.receive_parts(placed, towards, irradiance, false, false);
+    }
+
+    /// Changes a beam's light by `change` (W/m^2 per band, of either sign): what was received
+    /// from `towards` becomes what it is now, by linearity, without keeping the beams apart
+    /// (a level's closed instances keep their light from one gather to the next and take
+    /// only the change). `first`: as [`Self::receive`] (true) or [`Self::receive_spread`].
+    pub fn change(&mut self, placed: &Placed<'_>, towards: Vec3, change: &[f32], first: bool) {
+        self.receive_parts(placed, towards, change, first, true);
     }
 
     /// Adds `irradiance` (W/m^2) in band `band` to side `side` of polygon `p` kept apart
@@ -435,6 +443,7 @@ impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
         towards: Vec3,
         irradiance: &[f32],
         first: bool,
+        signed: bool,
     ) {
         let d = placed.local(towards);
         if d == Vec3::ZERO {
@@ -448,7 +457,7 @@ impl<S: AsRef<[f32]> + AsMut<[f32]>> Received<S> {
         let single = t.single();
         let wd = single.map(|s| s.grid().weights(d));
         for (band, &e) in irradiance.iter().enumerate().take(bands) {
-            if !(e.is_finite() && e > 0.0) {
+            if !(e.is_finite() && (e > 0.0 || signed && e != 0.0)) {
                 continue;
             }
             let (nb, polygons) = (self.bands, self.polygons);

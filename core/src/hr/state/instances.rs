@@ -1,22 +1,42 @@
 //! The closed instances' side of the state (hierarchical instantiation): their leaves, their
 //! originals' table slots and blocking polygons, their tables placed, and the light each
-//! received (all of it as floats, the direct light of suns and sky as half floats).
+//! received (all of it as floats, kept from one gather to the next, and what each kind of
+//! beam handed it so far, so that a gather adds only the change).
 
 use super::State;
+use crate::hr::exchange::CELLS;
 use crate::hr::pool::{floats, floats_mut, read, write};
 use crate::hr::records::{InstanceLeaf, TableSlot};
 
 /// Floats of a closed instance's received light, all its parts (see
-/// [`State::received_at`], [`State::direct_at`]), for tables of `bands` bands, `scatterers`
-/// polygons kept apart and `incoming_cells` incoming cells: all the light as floats, the
-/// direct light as half floats and their scale.
+/// [`State::received_at`], [`Handed`]), for tables of `bands` bands, `scatterers` polygons
+/// kept apart and `incoming_cells` incoming cells: all the light, then the power its direct
+/// light brought (intercepted and scattered, per band) and per part of [`Handed`] and
+/// direction cell of the exchange's grid what it holds, per band.
 pub(crate) const fn received_parts_floats(
     bands: usize,
     scatterers: usize,
     incoming_cells: usize,
 ) -> usize {
     let n = crate::tables::closed::received_floats(bands, scatterers, incoming_cells);
-    n + n.div_ceil(2) + 1
+    n + 2 * bands + 3 * CELLS * bands
+}
+
+/// What a closed instance's light was handed so far by each kind of beam, per direction
+/// cell of the exchange's grid and band: a gather adds to its light only the change since
+/// (`Received::change`), so that no copy of its direct light is kept to start again from
+/// (half its light's storage: 7.5 MB of the paper stand's top level).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Handed {
+    /// Its links' light, binned by direction towards the emitter (W/m^2 on a plane
+    /// facing it).
+    Links = 0,
+    /// The exchange's beams from the other closed instances (W, as the exchange's gather
+    /// hands them: see `exchange::receive`).
+    Exchange = 1,
+    /// As an emitter of the exchange, its escaping power per cell last landed on its
+    /// receivers' polygons (W: see `exchange::land`).
+    Sent = 2,
 }
 
 impl State {
@@ -96,53 +116,46 @@ impl State {
         (self.lay.received + 4 * leaf.received as usize, n)
     }
 
-    /// Where closed instance `i`'s direct light of suns and sky lies, fixed once lit (see
-    /// [`Self::note_direct`]): the byte offset of its half floats (as many as the light's
-    /// floats, each over the scale) and that of its scale (a float, the largest value).
-    /// Half floats keep 0.05% of each value; the whole light starts again from them at
-    /// every gather.
-    pub(crate) fn direct_at(&self, ws: &[u8], i: u32) -> (usize, usize, usize) {
-        let (at, n) = self.received_at(ws, i);
-        let halves = at + 4 * n;
-        (halves, n, halves + 4 * n.div_ceil(2))
-    }
-
-    /// Notes closed instance `i`'s light as its direct light (see [`Self::direct_at`]):
-    /// called once it was lit by the suns and sky alone.
-    pub(crate) fn note_direct(&self, ws: &mut [u8], i: u32) {
-        let (at, n) = self.received_at(ws, i);
-        let (halves, _, scale_at) = self.direct_at(ws, i);
-        let scale = floats(ws, at, n)
-            .iter()
-            .filter(|v| v.is_finite())
-            .fold(0.0f32, |m, v| m.max(v.abs()));
-        write(ws, scale_at, &scale);
-        for k in 0..n {
-            let v: f32 = read(ws, at + 4 * k);
-            let h = if scale > 0.0 { v / scale } else { 0.0 };
-            let bits = half::f16::from_f32(h).to_bits().to_le_bytes();
-            ws[halves + 2 * k..halves + 2 * k + 2].copy_from_slice(&bits);
-        }
-    }
-
-    /// Value `k` of closed instance `i`'s direct light (in the order of its whole light).
+    /// The power closed instance `i`'s direct light brought it (see [`Self::note_direct`]):
+    /// value `k` of its light's first `2 * bands` (intercepted per band, then scattered).
     pub(crate) fn direct_value(&self, ws: &[u8], i: u32, k: usize) -> f32 {
-        let (halves, n, scale_at) = self.direct_at(ws, i);
-        if k >= n {
+        let (at, n) = self.received_at(ws, i);
+        if k >= 2 * self.bands {
             return 0.0;
         }
-        let scale: f32 = read(ws, scale_at);
-        let bits = u16::from_le_bytes([ws[halves + 2 * k], ws[halves + 2 * k + 1]]);
-        scale * half::f16::from_bits(bits).to_f32()
+        read(ws, at + 4 * (n + k))
     }
 
-    /// Starts closed instance `i`'s whole light again from its direct light.
-    pub(crate) fn restart_from_direct(&self, ws: &mut [u8], i: u32) {
+    /// Where closed instance `i`'s light handed by `part` lies: the byte offset of its
+    /// `CELLS * bands` floats (cell by cell, band by band).
+    fn handed_at(&self, ws: &[u8], i: u32, part: Handed) -> usize {
         let (at, n) = self.received_at(ws, i);
-        for k in 0..n {
-            let v = self.direct_value(ws, i, k);
-            write(ws, at + 4 * k, &v);
+        at + 4 * (n + 2 * self.bands + part as usize * CELLS * self.bands)
+    }
+
+    /// What `part` handed closed instance `i` so far (see [`Handed`]).
+    pub(crate) fn handed<'a>(&self, ws: &'a [u8], i: u32, part: Handed) -> &'a [f32] {
+        floats(ws, self.handed_at(ws, i, part), CELLS * self.bands)
+    }
+
+    /// [`Self::handed`], to change.
+    pub(crate) fn handed_mut<'a>(&self, ws: &'a mut [u8], i: u32, part: Handed) -> &'a mut [f32] {
+        let at = self.handed_at(ws, i, part);
+        floats_mut(ws, at, CELLS * self.bands)
+    }
+
+    /// Notes closed instance `i`'s light, lit by the suns, sky and emitting polygons alone,
+    /// as its direct light: the power it brought is kept, and nothing was handed by links or
+    /// the exchange yet. Called once it was lit.
+    pub(crate) fn note_direct(&self, ws: &mut [u8], i: u32) {
+        let (at, n) = self.received_at(ws, i);
+        let nb = self.bands;
+        for k in 0..2 * nb {
+            let v: f32 = read(ws, at + 4 * k);
+            write(ws, at + 4 * (n + k), &v);
         }
+        let handed = self.handed_at(ws, i, Handed::Links);
+        ws[handed..handed + 4 * 3 * CELLS * nb].fill(0);
     }
 
     /// All the light closed instance `i` received (see `received_at`).
