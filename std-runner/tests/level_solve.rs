@@ -437,3 +437,85 @@ fn links_between_clusters_of_closed_instances_are_never_made_to_be_split() {
         );
     }
 }
+
+/// hi's own plan (`plan_hi`): its least opens every level (the solve at that size runs to
+/// its end), half of it is refused with no more than the plan's least named as needed, and
+/// its suggestion, which the command line takes without `--memory`, lets the fields refine
+/// as far as a huge workspace does: the same absorbed power, bit for bit. Swept over fields
+/// of 4 to 36 plants.
+#[test]
+fn the_hi_plan_is_what_the_solve_needs() {
+    use hirad_core::hr::{HrError, Inline, SolveError, plan_hi, plan_hi_scratch_bytes, solve_hi};
+    let mut exec = RayonExecutor::new(2).unwrap();
+    let base = field(1, 1, 1.0, 3.0);
+    let t = bake_original(&base, 0, &tables_settings(), &mut exec, &mut |_, _, _| {}).unwrap();
+    let tables = t.to_scene();
+    let settings = Settings::default();
+    let mut huge = vec![0u8; 256 << 20];
+    let mut last = 0u64;
+    for (nx, ny, spacing) in [(2u32, 2u32, 0.7f32), (4, 3, 0.5), (6, 6, 0.3)] {
+        let mut s = field(nx, ny, spacing, 3.0);
+        s.tables = vec![tables.clone()];
+        let bytes = compile(&s).unwrap();
+        let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+        let mut scratch = vec![0u8; plan_hi_scratch_bytes(&view)];
+        let plan = plan_hi(&view, &settings, Inline::NONE, 2, &mut scratch).unwrap();
+        let case = format!("{nx} x {ny} plants: {plan:?}");
+        println!("{case}");
+        assert!(plan.min_bytes < plan.suggested_bytes, "{case}");
+        assert!(
+            plan.suggested_bytes >= plan.top_level_bytes + plan.children_bytes,
+            "{case}"
+        );
+        // More plants, more closed instances in the top level: a larger plan.
+        assert!(plan.min_bytes > last, "{case}");
+        last = plan.min_bytes;
+        let mut want = ById::default();
+        solve_hi(
+            &view,
+            &settings,
+            Inline::NONE,
+            &mut huge,
+            &mut exec,
+            &mut hirad_core::hr::NoProgress,
+            &mut want,
+        )
+        .unwrap();
+        let mut run = |size: u64| {
+            let mut ws = vec![0u8; size as usize];
+            let mut got = ById::default();
+            solve_hi(
+                &view,
+                &settings,
+                Inline::NONE,
+                &mut ws,
+                &mut exec,
+                &mut hirad_core::hr::NoProgress,
+                &mut got,
+            )
+            .map(|stats| (stats, got))
+        };
+        let (_, least) = run(plan.min_bytes).unwrap_or_else(|e| panic!("{case}: at least: {e:?}"));
+        assert_eq!(least.ids, want.ids, "{case}");
+        match run(plan.min_bytes / 2) {
+            Err(SolveError::Hr(HrError::WorkspaceTooSmall { needed })) => {
+                assert!(
+                    needed > plan.min_bytes / 2 && needed <= plan.min_bytes,
+                    "{case}: needs {needed}"
+                );
+            }
+            other => panic!("{case}: half the least: {:?}", other.map(|r| r.0)),
+        }
+        let (stats, got) = run(plan.suggested_bytes).unwrap();
+        assert!(!stats.budget_limited, "{case}");
+        assert_eq!(got.ids, want.ids, "{case}");
+        assert!(
+            got.absorbed
+                .power
+                .iter()
+                .zip(&want.absorbed.power)
+                .all(|(a, b)| a[0].to_bits() == b[0].to_bits() && a[1].to_bits() == b[1].to_bits()),
+            "{case}: the suggestion and a huge workspace differ"
+        );
+    }
+}

@@ -48,6 +48,7 @@ mod original_geometry;
 mod output;
 mod pending;
 mod plan;
+mod plan_hi;
 mod polygon_light;
 mod pool;
 mod reach;
@@ -73,6 +74,7 @@ pub use error::{HrError, SolveError};
 pub use exec::{Executor, NoProgress, Progress, Sequential};
 pub use open::solve_hi;
 pub use plan::{Plan, plan};
+pub use plan_hi::{HiPlan, plan_hi, plan_hi_scratch_bytes};
 pub use settings::{
     Inline, Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats, WorkspaceRegions,
 };

@@ -92,8 +92,9 @@ where
         bytemuck::try_cast_slice_mut(&mut rooms[..rooms_bytes])
             .map_err(|_| HrError::ScratchTooSmall)?
     };
-    let (children, top_min) =
+    let (children, top) =
         super::room::rooms(view, settings, inline, rooms, &mut rest[..room_scratch])?;
+    let top_min = top.min_bytes;
     let rooms: &[Rooms] = rooms;
     // The whole scene's receiving sides (the final gather's rays are spread over them).
     let need = super::census::census_scratch_bytes(view);
@@ -123,9 +124,7 @@ where
     let mut ctx = Ctx::new(shared, progress, sink);
     // A level that found its part too small says what it lacked there; the whole solve
     // needs at least the top level and one path of its children, all at their least.
-    let least = (origin as u64)
-        .saturating_add(top_min)
-        .saturating_add(children.min);
+    let least = super::plan_hi::least(origin as u64, top_min, children.min);
     level(&mut ctx, &root, None, rest, origin, executor, 0, 0).map_err(|e| match e {
         SolveError::Hr(HrError::WorkspaceTooSmall { needed }) => {
             SolveError::Hr(HrError::WorkspaceTooSmall {

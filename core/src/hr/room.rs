@@ -19,7 +19,7 @@ use bytemuck::{Pod, Zeroable};
 const PLANNED_BEAMS: u32 = 4 * 64;
 
 /// Bytes added to every level's least room (see `rooms`).
-const MARGIN: u64 = 64 << 10;
+pub(crate) const MARGIN: u64 = 64 << 10;
 
 /// Workspace bytes: the least that opens a level (coarsest solutions all the way down) and
 /// what usually lets its refinement finish at the solve's epsilon.
@@ -62,14 +62,14 @@ pub(crate) fn scratch_bytes<S: SceneSource>(view: &SceneView<S>) -> usize {
 
 /// Fills `out` (one per original) with the rooms of the originals closed anywhere under the
 /// policy `inline` (zero for the others) and returns the room the top level leaves its
-/// closed instances, and the top level's own least room. `scratch` holds [`scratch_bytes`].
+/// closed instances, and the top level's own plan. `scratch` holds [`scratch_bytes`].
 pub(crate) fn rooms<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     inline: Inline<'_>,
     out: &mut [Rooms],
     scratch: &mut [u8],
-) -> Result<(Room, u64), HrError> {
+) -> Result<(Room, super::plan::Plan), HrError> {
     let info = *view.info();
     let n = info.originals as usize;
     if out.len() < n || scratch.len() < scratch_bytes(view) {
@@ -98,7 +98,7 @@ pub(crate) fn rooms<S: SceneSource>(
     let top = census(info.scene_root.0, census_scratch)?;
     top_bits.copy_from_slice(closed_bits(view, census_scratch));
     seen.copy_from_slice(top_bits);
-    let top_min = plan_level(view, settings, true, &top, info.suns + info.sky, false)?.min_bytes;
+    let top_plan = plan_level(view, settings, true, &top, info.suns + info.sky, false)?;
     let sources = info.suns + info.sky + PLANNED_BEAMS;
     let beams = (sources as usize * beam_floats(info.bands as usize) * 4) as u64;
     // Each pass computes every seen original's room from its children's of the pass before:
@@ -117,7 +117,7 @@ pub(crate) fn rooms<S: SceneSource>(
             // takes a little more for itself (block tables, alignment), and what it leaves
             // its children is counted in whole blocks.
             let own = Room {
-                min: plan.min_bytes + plan.min_bytes / 4 + MARGIN + beams,
+                min: least_with_margin(plan.min_bytes) + beams,
                 suggested: plan.estimated_bytes + beams,
             };
             let below = widest(out, mine);
@@ -135,10 +135,19 @@ pub(crate) fn rooms<S: SceneSource>(
             }
         }
         if !changed {
-            return Ok((widest(out, top_bits), top_min));
+            return Ok((widest(out, top_bits), top_plan));
         }
     }
     Err(HrError::SceneTooLarge)
+}
+
+/// A level's least workspace with the margin a level laid out in more than its least takes
+/// for itself (block tables, alignment; what it leaves its children is counted in whole
+/// blocks): a quarter more and 64 KiB.
+pub(crate) fn least_with_margin(min_bytes: u64) -> u64 {
+    min_bytes
+        .saturating_add(min_bytes / 4)
+        .saturating_add(MARGIN)
 }
 
 /// The largest room of the originals whose bits are set.

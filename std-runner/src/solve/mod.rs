@@ -267,23 +267,27 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     let internal = visibility == VisibilityChoice::Core || hi;
     let mut scratch = vec![0u8; hr::census_scratch_bytes(view)];
     let plan = hr::plan(view, settings, internal, &mut scratch).map_err(classify)?;
-    // Hierarchical instantiation holds one path of levels and their originals' tables: what
-    // it touches of a workspace (pages are taken lazily) is far less than the expanded
-    // scene's plan; without a budget it gets that plan's size and room for every table
-    // twice over, of which it uses what its levels need.
-    let size = match memory {
-        Some(m) => m,
-        None if hi => {
-            let mut tables = 0u64;
-            for i in 0..view.info().tables {
-                let r = view
-                    .table(i)
-                    .map_err(|e| crate::exit::input(anyhow!("{e}")))?;
-                tables += 4 * r.values() + r.visible_bytes();
+    // Hierarchical instantiation holds one path of levels: without a budget it gets its own
+    // plan's suggestion (the top level's estimated plan and room for its widest closed
+    // instances side by side), whatever the expanded scene would need.
+    let size = match (memory, hi_inline) {
+        (Some(m), _) => m,
+        (None, Some(inline)) => {
+            let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
+            let p = hr::plan_hi(view, settings, inline, threads, &mut scratch).map_err(classify)?;
+            if progress.enabled() {
+                let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+                eprintln!(
+                    "note: workspace {:.1} MiB, hi's own plan: the top level {:.1} MiB, room for its closed instances {:.1} MiB ({:.1} MiB at least; --memory sets a budget)",
+                    mib(p.suggested_bytes),
+                    mib(p.top_level_bytes),
+                    mib(p.children_bytes),
+                    mib(p.min_bytes)
+                );
             }
-            plan.suggested_bytes + 2 * tables + (32 << 20)
+            p.suggested_bytes
         }
-        None => plan.suggested_bytes,
+        (None, None) => plan.suggested_bytes,
     };
     if size < plan.min_bytes && !hi {
         return Err(crate::exit::usage(anyhow!(
