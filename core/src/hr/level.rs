@@ -38,6 +38,9 @@ pub(crate) struct LevelRoot<'b> {
     /// The workspace its closed instances need to be opened, which it leaves free when it
     /// refines (see `room`).
     pub children: Room,
+    /// What the level itself is estimated to grow by above its least (bytes; see
+    /// `room::capped_total`).
+    pub own_growth: u64,
 }
 
 impl<'b> LevelRoot<'b> {
@@ -49,6 +52,7 @@ impl<'b> LevelRoot<'b> {
             beams: None,
             inline: Inline::NONE,
             children: Room::default(),
+            own_growth: u64::MAX,
         }
     }
 

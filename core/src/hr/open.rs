@@ -111,6 +111,7 @@ where
     let root = LevelRoot {
         inline,
         children,
+        own_growth: top.estimated_bytes.saturating_sub(top.min_bytes),
         ..LevelRoot::scene(view)
     };
     let shared = Shared {
@@ -239,8 +240,14 @@ where
         n => 2 * n,
     };
     let b = run.st.blocks;
-    run.st.blocks.total =
-        super::room::capped_total(b.total, b.used, b.size, root.children, together);
+    run.st.blocks.total = super::room::capped_total(
+        b.total,
+        b.used,
+        b.size,
+        root.children,
+        together,
+        root.own_growth,
+    );
     run.st.scene_sides = ctx.shared.scene_sides;
     run.rounds(ctx.progress);
     // Every level's patches relit by the final gather's rays, as hr's are: the light the

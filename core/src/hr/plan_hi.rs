@@ -86,7 +86,10 @@ pub fn plan_hi<S: SceneSource>(
         t => 2 * t,
     };
     let children_bytes = children.suggested.saturating_mul(together);
-    let top_level_bytes = top.estimated_bytes.max(top.min_bytes);
+    // Its least with the margin of every level's least room, and what it is estimated to
+    // grow by: `open::level` leaves its children the rest (see `room::capped_total`).
+    let top_level_bytes = super::room::least_with_margin(top.min_bytes)
+        .saturating_add(top.estimated_bytes.saturating_sub(top.min_bytes));
     Ok(HiPlan {
         min_bytes: least(origin, top.min_bytes, children.min),
         suggested_bytes: origin

@@ -150,6 +150,14 @@ pub(crate) fn least_with_margin(min_bytes: u64) -> u64 {
         .saturating_add(MARGIN)
 }
 
+/// What a level opened from rooms `r` is estimated to grow by above its least (bytes): its
+/// own suggested room less its own least, its children's taken out.
+pub(crate) fn own_growth(r: &Rooms) -> u64 {
+    let suggested = r.open.suggested.saturating_sub(r.below.suggested);
+    let min = r.open.min.saturating_sub(r.below.min);
+    suggested.saturating_sub(min)
+}
+
 /// The largest room of the originals whose bits are set.
 fn widest(rooms: &[Rooms], bits: &[u8]) -> Room {
     let mut r = Room::default();
@@ -164,26 +172,29 @@ fn widest(rooms: &[Rooms], bits: &[u8]) -> Room {
 /// Caps the refinement of a level whose blocks are `blocks` (of `size` bytes, `used` taken)
 /// so that room for its children stays free: the children's suggested room for `together`
 /// of them at once (they open side by side), else for one, else their least room for
-/// `together`, else for one, whichever first leaves the level at least half of what it has
-/// free; the least room for one when none does but it fits. Returns the new block total.
+/// `together`, else for one, whichever first leaves the level what it is estimated to grow
+/// by (`own`, bytes) or half of what it has free, the less of the two; the least room for
+/// one when none does but it fits. Returns the new block total.
 pub(crate) fn capped_total(
     total: u32,
     used: u32,
     size: usize,
     children: Room,
     together: u64,
+    own: u64,
 ) -> u32 {
     if children == Room::default() || size == 0 {
         return total;
     }
     let spare = (total.saturating_sub(used)) as u64 * size as u64;
+    let mine = own.min(spare / 2);
     let wanted = [
         children.suggested.saturating_mul(together),
         children.suggested,
         children.min.saturating_mul(together),
         children.min,
     ];
-    let keep = match wanted.iter().find(|&&r| r <= spare / 2) {
+    let keep = match wanted.iter().find(|&&r| r <= spare - mine) {
         Some(&r) => r,
         None if children.min <= spare => children.min,
         None => return total,
@@ -202,17 +213,36 @@ mod tests {
             suggested: 10_000,
         };
         // Plenty: two children's suggested rooms kept free.
-        assert_eq!(capped_total(1_000, 0, 100, kids, 2), 800);
+        assert_eq!(capped_total(1_000, 0, 100, kids, 2, u64::MAX), 800);
         // Less: one suggested room.
-        assert_eq!(capped_total(300, 100, 100, kids, 2), 200);
+        assert_eq!(capped_total(300, 100, 100, kids, 2, u64::MAX), 200);
         // Less still: the least room for two, then for one.
-        assert_eq!(capped_total(140, 100, 100, kids, 2), 120);
-        assert_eq!(capped_total(120, 100, 100, kids, 2), 110);
+        assert_eq!(capped_total(140, 100, 100, kids, 2, u64::MAX), 120);
+        assert_eq!(capped_total(120, 100, 100, kids, 2, u64::MAX), 110);
         // Not even half for the least room: it all the same, when it fits.
-        assert_eq!(capped_total(115, 100, 100, kids, 2), 105);
+        assert_eq!(capped_total(115, 100, 100, kids, 2, u64::MAX), 105);
         // It does not fit: nothing capped (the children will say what they need).
-        assert_eq!(capped_total(105, 100, 100, kids, 2), 105);
+        assert_eq!(capped_total(105, 100, 100, kids, 2, u64::MAX), 105);
         // No children: nothing capped.
-        assert_eq!(capped_total(105, 100, 100, Room::default(), 2), 105);
+        assert_eq!(
+            capped_total(105, 100, 100, Room::default(), 2, u64::MAX),
+            105
+        );
+    }
+
+    #[test]
+    fn a_level_estimated_to_grow_little_leaves_its_children_more_than_half() {
+        let kids = Room {
+            min: 1_000,
+            suggested: 10_000,
+        };
+        // 30,000 bytes free: half is not room for two suggested rooms, but the level is
+        // estimated to grow by 5,000 only: two kept, the level refines in the rest.
+        assert_eq!(capped_total(400, 100, 100, kids, 2, 5_000), 200);
+        assert_eq!(capped_total(400, 100, 100, kids, 2, u64::MAX), 300);
+        // Estimated to grow by more than half: as before, half at least.
+        assert_eq!(capped_total(400, 100, 100, kids, 2, 20_000), 300);
+        // Growth estimated at nothing: every option is weighed against all that is free.
+        assert_eq!(capped_total(300, 100, 100, kids, 2, 0), 100);
     }
 }

@@ -196,6 +196,11 @@ where
             .rooms
             .get(item.original as usize)
             .map_or(Default::default(), |r| r.below),
+        own_growth: ctx
+            .shared
+            .rooms
+            .get(item.original as usize)
+            .map_or(u64::MAX, super::room::own_growth),
     };
     // The contents' rays go on through this level (and those it is open in).
     let here = super::vis::Outer {
