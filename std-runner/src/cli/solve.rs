@@ -61,8 +61,9 @@ pub struct Args {
     /// Worker threads, 1 to 1024 (results are identical for any count). Default: every core.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub threads: Option<u16>,
-    /// Workspace size for hr, e.g. 64M, 2G, 500000000 (bytes; K/M/G are powers of 1024).
-    /// Default: the planner's suggestion. A full workspace stops refinement and is reported.
+    /// Workspace size, e.g. 64M, 2G, 500000000 (bytes; K/M/G are powers of 1024). Default:
+    /// the planner's suggestion (for hi its own plan: the top level and room for its closed
+    /// instances side by side). A full workspace stops refinement and is reported.
     #[arg(long, value_parser = parse_bytes)]
     pub memory: Option<u64>,
     /// Write one row per input polygon, in global-id order, to this CSV file.
