@@ -278,7 +278,7 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
             if progress.enabled() {
                 let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
                 eprintln!(
-                    "note: workspace {:.1} MiB, hi's own plan: the top level {:.1} MiB, room for its closed instances {:.1} MiB ({:.1} MiB at least; --memory sets a budget)",
+                    "note: workspace {:.1} MiB, hi's own plan: the top level {:.1} MiB, room for its closed instances {:.1} MiB ({:.1} MiB surely opens every level; --memory sets a budget)",
                     mib(p.suggested_bytes),
                     mib(p.top_level_bytes),
                     mib(p.children_bytes),
