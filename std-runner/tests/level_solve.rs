@@ -236,6 +236,15 @@ fn closed_plants_absorb_what_expanded_plants_do() {
     println!("worst plant error {:.2}%", 100.0 * worst);
 }
 
+/// True when `a` and `b` absorb the same power in both bands, bit for bit.
+fn same_bits(a: &Absorbed, b: &Absorbed) -> bool {
+    a.power.len() == b.power.len()
+        && a.power
+            .iter()
+            .zip(&b.power)
+            .all(|(x, y)| x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits()))
+}
+
 /// Every polygon's global id once, in order, and what it absorbs.
 #[derive(Default)]
 struct ById {
@@ -338,11 +347,7 @@ fn hierarchical_instantiation_gives_every_polygon_its_light() {
         .unwrap();
         assert_eq!(one.ids, hi.ids, "{case}");
         assert!(
-            one.absorbed
-                .power
-                .iter()
-                .zip(&hi.absorbed.power)
-                .all(|(a, b)| a[0].to_bits() == b[0].to_bits() && a[1].to_bits() == b[1].to_bits()),
+            same_bits(&one.absorbed, &hi.absorbed),
             "{case}: one thread and two differ"
         );
         assert_eq!(
@@ -510,11 +515,7 @@ fn the_hi_plan_is_what_the_solve_needs() {
         assert!(!stats.budget_limited, "{case}");
         assert_eq!(got.ids, want.ids, "{case}");
         assert!(
-            got.absorbed
-                .power
-                .iter()
-                .zip(&want.absorbed.power)
-                .all(|(a, b)| a[0].to_bits() == b[0].to_bits() && a[1].to_bits() == b[1].to_bits()),
+            same_bits(&got.absorbed, &want.absorbed),
             "{case}: the suggestion and a huge workspace differ"
         );
     }
