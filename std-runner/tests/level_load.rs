@@ -554,6 +554,39 @@ fn closed_instances_block_with_their_own_polygons() {
                 wrong, 0,
                 "{wrong} of 4000 segments disagree ({hits} blocked)"
             );
+            // The nearest instance met, and where: the one of the nearest quad crossed.
+            let nearest = |a: Vec3, b: Vec3| -> Option<(usize, f64)> {
+                let mut best: Option<(usize, f64)> = None;
+                for (k, qs) in quads.iter().enumerate() {
+                    for q in qs {
+                        for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                            if let Some(s) = segment_triangle(a, b, t)
+                                && best.is_none_or(|(_, b)| s < b)
+                            {
+                                best = Some((k, s));
+                            }
+                        }
+                    }
+                }
+                best
+            };
+            let mut met = 0;
+            for k in 0..4000u32 {
+                let h = |j: u32| ((k * 7919 + j * 104_729 + 17) % 1000) as f32 / 1000.0;
+                let a = Vec3::new(-5.0 + 10.0 * h(1), 0.2 + 1.6 * h(2), 0.2 + 0.6 * h(3));
+                let b = Vec3::new(-5.0 + 10.0 * h(4), 0.2 + 1.6 * h(5), 0.2 + 0.6 * h(6));
+                let got = level.first_instance(a, b, None, k);
+                match nearest(a, b) {
+                    Some((q, t)) => {
+                        met += 1;
+                        let (i, s) = got.unwrap_or_else(|| panic!("segment {k} meets quad {q}"));
+                        assert_eq!(i, by_node[q], "segment {k}: nearest instance");
+                        assert!((s as f64 - t).abs() < 1e-4, "segment {k}: at {s}, not {t}");
+                    }
+                    None => assert_eq!(got, None, "segment {k} meets no quad"),
+                }
+            }
+            assert!(met > 40, "the segments must meet leaves: {met}");
             // From a point of each instance's own quad, with it skipped: the others only.
             for (k, qs) in quads.iter().enumerate() {
                 let a = (qs[0][0] + qs[0][2]) * 0.5;

@@ -86,9 +86,21 @@ impl<'a, P: PolygonSet> BvhVisibility<'a, P> {
     /// rules as [`BvhVisibility::blocker`]. Nearest up to the rounding of t: of polygons
     /// crossed at nearly the same t (coplanar ones), any may be returned.
     pub fn first_hit(&self, from: Vec3, to: Vec3, skip: [u32; 2]) -> Option<(u32, f32)> {
+        self.first_hit_before(from, to, skip, 1.0)
+    }
+
+    /// [`BvhVisibility::first_hit`] among the crossings before the parameter `t_max` (a
+    /// caller that knows something nearer blocks prunes what lies beyond it).
+    pub fn first_hit_before(
+        &self,
+        from: Vec3,
+        to: Vec3,
+        skip: [u32; 2],
+        t_max: f32,
+    ) -> Option<(u32, f32)> {
         let seg = SegmentTest::new(from, to - from)?;
         self.bvh
-            .closest_hit_within(from, to, 0.5 * SEGMENT_MARGIN, 1.0, |id, t_max| {
+            .closest_hit_within(from, to, 0.5 * SEGMENT_MARGIN, t_max, |id, t_max| {
                 self.blocks(&seg, id, skip).filter(|&t| t < t_max)
             })
     }

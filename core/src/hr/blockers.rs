@@ -155,22 +155,37 @@ pub(crate) fn light_along(
         return 1.0;
     }
     let d = (to - from).normalize_or_zero();
-    // (entry, transmittance, instance, polygon met or NONE), sorted by entry.
-    let mut met: heapless::Vec<(f32, f32, u32, u32), MAX_ALONG> = heapless::Vec::new();
-    bvh(st, ws).any_hit(from, to, |i| {
+    // The nearest polygon met (the instances' BVH skips boxes entered beyond it), and the
+    // media before it: (entry, transmittance, instance, polygon met or NONE), nearest first.
+    let mut media: heapless::Vec<(f32, f32, u32, u32), MAX_ALONG> = heapless::Vec::new();
+    let mut polygon = NONE;
+    let opaque = bvh(st, ws).closest_hit(from, to, |i, t_max| {
         if i == skip {
-            return false;
+            return None;
         }
-        // Its own polygons: the light of the first one met, nothing through it; a medium:
-        // its light, and what it lets through.
-        let entry = match meets(st, ws, i, from, to, d) {
-            Some(Met::Polygon(t, q)) => (t, 0.0, i, q),
-            Some(Met::Medium(entry, t)) => (entry, t, i, NONE),
-            None => return false,
-        };
-        met.push(entry).is_err()
+        match meets(st, ws, i, from, to, d, t_max)? {
+            Met::Polygon(t, q) => {
+                polygon = q;
+                Some(t)
+            }
+            Met::Medium(entry, t) => {
+                keep_nearest(&mut media, (entry, t, i, NONE));
+                None
+            }
+        }
     });
+    let mut met = media;
+    if let Some((_, t_hit)) = opaque {
+        met.retain(|m| m.0 < t_hit);
+    }
     met.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+    if let Some((i, t_hit)) = opaque {
+        // Its own polygon ends the way: a medium entered beyond it was dropped above.
+        if met.is_full() {
+            met.pop();
+        }
+        let _ = met.push((t_hit, 0.0, i, polygon));
+    }
     let mut through = 1.0f32;
     if met.is_empty() {
         return through;
@@ -414,19 +429,31 @@ enum Met {
     Medium(f32, f32),
 }
 
-/// What the segment `from..to` (of unit direction `d`) meets of closed instance `i`: its
-/// first polygon where it has its own (its BVH tests its box first), else its box as a
-/// medium of its `tau`; `None` when neither.
-fn meets(st: &State, ws: &[u8], i: u32, from: Vec3, to: Vec3, d: Vec3) -> Option<Met> {
+/// What the segment `from..to` (of unit direction `d`) meets of closed instance `i` before
+/// the parameter `t_max`: its first polygon where it has its own (its BVH tests its box
+/// first), else its box as a medium of its `tau`; `None` when neither.
+fn meets(st: &State, ws: &[u8], i: u32, from: Vec3, to: Vec3, d: Vec3, t_max: f32) -> Option<Met> {
     let (lo, hi, place, slot) = placed_box(st, ws, i);
     if let Some(g) = st.original_geometry(ws, slot) {
         return g
-            .first_hit(&place, from, to)
+            .first_hit(&place, from, to, t_max)
             .map(|(q, t)| Met::Polygon(t, q));
     }
     let tau = st.placed(ws, i).tau(d);
     crate::tables::closed::box_crossing(lo, hi, &place, from, to, tau)
+        .filter(|&(entry, _)| entry < t_max)
         .map(|(entry, t)| Met::Medium(entry, t))
+}
+
+/// Adds `m` to `met`, which keeps the [`MAX_ALONG`] nearest by entry: when full, `m`
+/// takes the place of the farthest if it is nearer.
+fn keep_nearest(met: &mut heapless::Vec<(f32, f32, u32, u32), MAX_ALONG>, m: (f32, f32, u32, u32)) {
+    if let Err(m) = met.push(m) {
+        let far = (0..met.len()).fold(0, |f, k| if met[k].0 > met[f].0 { k } else { f });
+        if m.0 < met[far].0 {
+            met[far] = m;
+        }
+    }
 }
 
 /// Closed instance `i`'s original's box, its transform to world and its table slot.
@@ -500,26 +527,22 @@ pub(crate) fn first_instance(
     if st.instances == 0 {
         return None;
     }
-    let mut best: Option<(u32, f32, u32)> = None;
     let d = (to - from).normalize_or_zero();
-    bvh(st, ws).any_hit(from, to, |i| {
+    // The polygon met by the nearest hit so far (the BVH skips boxes entered beyond it).
+    let mut polygon = NONE;
+    let (i, t) = bvh(st, ws).closest_hit(from, to, |i, t_max| {
         if i == skip {
-            return false;
+            return None;
         }
-        let hit = match meets(st, ws, i, from, to, d) {
-            Some(Met::Polygon(t, q)) => Some((t, q)),
-            Some(Met::Medium(entry, t)) => {
+        let (t, q) = match meets(st, ws, i, from, to, d, t_max)? {
+            Met::Polygon(t, q) => (t, q),
+            Met::Medium(entry, t) => {
                 let (u, _) = crate::sampling::unit2(crate::sampling::hash3(h, i, 0xF1));
-                (u >= t).then_some((entry, NONE))
+                (u >= t).then_some((entry, NONE))?
             }
-            None => None,
         };
-        if let Some((t, q)) = hit
-            && best.is_none_or(|(_, b, _)| t < b)
-        {
-            best = Some((i, t, q));
-        }
-        false
-    });
-    best
+        polygon = q;
+        Some(t)
+    })?;
+    Some((i, t, polygon))
 }

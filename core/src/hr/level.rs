@@ -41,6 +41,9 @@ pub(crate) struct LevelRoot<'b> {
     /// What the level itself is estimated to grow by above its least (bytes; see
     /// `room::capped_total`).
     pub own_growth: u64,
+    /// Most passes of its final gather when their number is automatic (see
+    /// `State::most_passes`).
+    pub most_passes: u32,
 }
 
 impl<'b> LevelRoot<'b> {
@@ -53,6 +56,7 @@ impl<'b> LevelRoot<'b> {
             inline: Inline::NONE,
             children: Room::default(),
             own_growth: u64::MAX,
+            most_passes: super::settings::MAX_FINAL_PASSES,
         }
     }
 

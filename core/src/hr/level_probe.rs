@@ -105,6 +105,20 @@ impl Level<'_> {
         let s = skip.map_or(crate::limits::NONE, |i| super::blockers::SKIP_INSTANCE | i);
         super::blockers::transmittance(self.st, self.ws, from, to, [s, crate::limits::NONE])
     }
+
+    /// The closed instance the segment `from..to` meets first, but instance `skip`, and the
+    /// parameter where (one with polygons of its own where the segment meets the first of
+    /// them; one without at its box's entry, kept by the hash `h` with probability 1 - tau).
+    pub fn first_instance(
+        &self,
+        from: Vec3,
+        to: Vec3,
+        skip: Option<u32>,
+        h: u32,
+    ) -> Option<(u32, f32)> {
+        let skip = skip.unwrap_or(crate::limits::NONE);
+        super::blockers::first_instance(self.st, self.ws, from, to, skip, h).map(|(i, t, _)| (i, t))
+    }
 }
 
 /// Counts, lays out and loads the scene's top level under `instancing` into `workspace`

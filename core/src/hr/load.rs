@@ -76,6 +76,7 @@ pub(crate) fn load<S: SceneSource>(
         power: 0.0,
         unit_power: 0.0,
         scene_sides: 0,
+        most_passes: level.most_passes,
         suns: level.suns(view),
         sources: level.sources(view),
         typical_area: 0.0,

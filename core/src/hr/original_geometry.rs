@@ -366,11 +366,17 @@ impl<'a> OriginalGeometry<'a> {
     }
 
     /// Where the segment `from..to` (world) first meets a polygon of the instance placed by
-    /// `place`: the polygon (in the original's expanded order) and its parameter (0 at
-    /// `from`, 1 at `to`).
-    pub(crate) fn first_hit(&self, place: &Similarity, from: Vec3, to: Vec3) -> Option<(u32, f32)> {
+    /// `place` before the parameter `t_max`: the polygon (in the original's expanded order)
+    /// and its parameter (0 at `from`, 1 at `to`).
+    pub(crate) fn first_hit(
+        &self,
+        place: &Similarity,
+        from: Vec3,
+        to: Vec3,
+        t_max: f32,
+    ) -> Option<(u32, f32)> {
         let (a, b) = local(place, from, to);
-        self.vis.first_hit(a, b, [NONE, NONE])
+        self.vis.first_hit_before(a, b, [NONE, NONE], t_max)
     }
 }
 

@@ -71,8 +71,15 @@ fn leaving_power(st: &State, ws: &[u8]) -> Leaving {
 
 /// The relighting passes before the polygons' gather: as many as the settings ask, or
 /// (for [`super::settings::Settings::AUTO`]) until one moves the leaving light by less than
-/// [`SETTLED`] of what enters, at most [`super::settings::MAX_FINAL_PASSES`] passes in all. Records
-/// the passes (the polygons' own included), the last pass's move and the rays in the stats.
+/// [`SETTLED`] of what enters, at most `State::most_passes` passes in all
+/// ([`super::settings::MAX_FINAL_PASSES`], or an opened level's parent's). Records the
+/// passes (the polygons' own included), the last pass's move and the rays in the stats.
+///
+/// An opened level takes no more passes than its parent: a level of a few hundred polygons
+/// does not settle by this test, as its passes' own samples move its leaving light by 1-2%
+/// (noise, not convergence; the whole scene's sum averages it away), and what reaches it
+/// from the levels around is no input here (it arrives by the gather's rays). The paper
+/// poplar's branches took 1 to 3 relighting passes where the whole scene (and hr) took one.
 pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     st: &mut State,
     ws: &mut [u8],
@@ -83,7 +90,7 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     let asked = st.settings.final_passes;
     let auto = asked == super::settings::Settings::AUTO;
     let passes = if auto {
-        super::settings::MAX_FINAL_PASSES
+        st.most_passes.clamp(1, super::settings::MAX_FINAL_PASSES)
     } else {
         asked
     };

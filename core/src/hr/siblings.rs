@@ -201,6 +201,12 @@ where
             .rooms
             .get(item.original as usize)
             .map_or(u64::MAX, super::room::own_growth),
+        // As many passes as the parent took at most (all it may take where it gathered
+        // nothing): see `relight::relight_passes`.
+        most_passes: match st.stats.final_passes {
+            0 => st.most_passes,
+            n => n.min(st.most_passes),
+        },
     };
     // The contents' rays go on through this level (and those it is open in).
     let here = super::vis::Outer {

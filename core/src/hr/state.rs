@@ -43,6 +43,10 @@ pub(crate) struct State {
     /// is one of its levels (the final gather spreads its rays over them, see
     /// `gather_rays::rays_per_side`); 0: this level's own.
     pub scene_sides: u64,
+    /// Most passes of the final gather (its relighting passes and the polygons' own) when
+    /// their number is automatic: an opened level takes at most as many as its parent did
+    /// (see `relight::relight_passes`).
+    pub most_passes: u32,
     /// Suns (the first sources) and all sources (suns, then sky directions).
     pub suns: u32,
     pub sources: u32,
