@@ -387,4 +387,9 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{err}"));
     assert!(needed > 200 * 1024, "{err}");
+    // Warned before the solve started, with the least that surely opens every level.
+    assert!(
+        err.contains("warning: --memory 0.2 MiB is less than the"),
+        "{err}"
+    );
 }
