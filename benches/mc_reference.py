@@ -21,6 +21,7 @@ and side, the mean irradiance (W/m^2) and its standard error.
 
 import argparse
 import csv
+import os
 import sys
 
 import numpy as np
@@ -62,7 +63,7 @@ def read_lights(path):
 
 
 def read_obj(path, materials):
-    verts, faces, mats, names = [], [], [], []
+    verts, faces, mats = [], [], []
     current = None
     with open(path) as f:
         for line in f:
@@ -223,7 +224,6 @@ def main():
     by_poly = {}
     for ti, k in enumerate(owner):
         by_poly.setdefault(k, []).append(ti)
-    rows = []
     jobs = []  # (polygon, side)
     for k in chosen:
         jobs.append((k, 0))
@@ -268,8 +268,6 @@ def main():
                 else:
                     row += [""] * (2 * nb)
             w.writerow(row)
-    import os
-
     os.replace(a.out + ".tmp", a.out)
 
 

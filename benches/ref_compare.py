@@ -5,8 +5,9 @@
 
 For every results table, per band and side: relative error of each sampled polygon's
 irradiance (median, 90th percentile), the L2 error as % of the largest reference value,
-and the power-weighted total; the reference's own standard error (median, relative) is
-printed first, so that what the reference cannot resolve is seen.
+and the power-weighted total; the worst polygon (its id, and its reference value against the result); the reference's
+own standard error (median, relative) is printed first, so that what the reference
+cannot resolve is seen.
 """
 
 import csv
@@ -39,6 +40,7 @@ def main():
         for c in cols:
             i, j, ai = rh.index(c), h.index(c), h.index("area_m2")
             errs, sq, top, p_ref, p_res = [], 0.0, 0.0, 0.0, 0.0
+            worst = (0.0, None, 0.0, 0.0)
             for k, row in ref.items():
                 if not row[i] or k not in res or not res[k][j]:
                     continue
@@ -50,9 +52,11 @@ def main():
                 p_res += a * v
                 if u > 1e-3:
                     errs.append(abs(v / u - 1))
+                    if errs[-1] > worst[0]:
+                        worst = (errs[-1], k, u, v)
             n = len(errs)
             l2 = 100 * (sq / max(n, 1)) ** 0.5 / top if top > 0 else float("nan")
-            print(f"  {c:22s} n {n:6d} median {100 * pct(errs, 0.5):6.2f}% p90 {100 * pct(errs, 0.9):6.2f}% L2 {l2:5.2f}% of max, power {100 * (p_res / p_ref - 1):+.2f}%")
+            print(f"  {c:22s} n {n:6d} median {100 * pct(errs, 0.5):6.2f}% p90 {100 * pct(errs, 0.9):6.2f}% L2 {l2:5.2f}% of max, power {100 * (p_res / p_ref - 1):+.2f}%, worst {100 * worst[0]:.0f}% (polygon {worst[1]}: {worst[2]:.4g} -> {worst[3]:.4g})")
 
 
 if __name__ == "__main__":

@@ -270,32 +270,31 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     // Hierarchical instantiation holds one path of levels: without a budget it gets its own
     // plan's suggestion (the top level's estimated plan and room for its widest closed
     // instances side by side), whatever the expanded scene would need.
-    let size = match (memory, hi_inline) {
-        (Some(m), Some(inline)) => {
-            // Below hi's least with its margin a level may find too little room hours in:
-            // say so before the solve starts (it tries: the paper stand ran in 34 MiB
-            // against a least of 39.1 MiB).
-            if progress.enabled() {
-                let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
-                let p =
-                    hr::plan_hi(view, settings, inline, threads, &mut scratch).map_err(classify)?;
-                if m < p.min_bytes {
-                    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
-                    eprintln!(
-                        "warning: --memory {:.1} MiB is less than the {:.1} MiB with which hi's plan surely opens every level: the solve tries, and stops (exit 2) if a level does not fit",
-                        mib(m),
-                        mib(p.min_bytes)
-                    );
-                }
+    let hi_plan = match hi_inline {
+        Some(inline) => {
+            let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
+            Some(hr::plan_hi(view, settings, inline, threads, &mut scratch).map_err(classify)?)
+        }
+        None => None,
+    };
+    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    let size = match (memory, hi_plan) {
+        // Below hi's least with its margin a level may find too little room hours in: say
+        // so before the solve starts (it tries: the paper stand ran in 34 MiB against a
+        // least of 39.1 MiB).
+        (Some(m), Some(p)) => {
+            if progress.enabled() && m < p.min_bytes {
+                eprintln!(
+                    "warning: --memory {:.1} MiB is less than the {:.1} MiB with which hi's plan surely opens every level: the solve tries, and stops (exit 2) if a level does not fit",
+                    mib(m),
+                    mib(p.min_bytes)
+                );
             }
             m
         }
         (Some(m), None) => m,
-        (None, Some(inline)) => {
-            let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
-            let p = hr::plan_hi(view, settings, inline, threads, &mut scratch).map_err(classify)?;
+        (None, Some(p)) => {
             if progress.enabled() {
-                let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
                 eprintln!(
                     "note: workspace {:.1} MiB, hi's own plan: the top level {:.1} MiB, room for its closed instances {:.1} MiB ({:.1} MiB surely opens every level; --memory sets a budget)",
                     mib(p.suggested_bytes),
