@@ -8,23 +8,11 @@
 
 mod common;
 
-use common::{fails_with, fixture, hirad, s};
+use common::{COARSE_TABLES, fails_with, fixture, hirad, s};
 use hirad::output::ResultsTable;
 use hirad::solve::RayonExecutor;
 use hirad_core::hr::{Inline, NoProgress, Settings, Stats};
 use hirad_core::image::{SceneView, SliceSource};
-
-/// Grids of `hirad tables` coarse enough for a test (their targets are not met).
-const COARSE: [&str; 8] = [
-    "--max-side",
-    "4",
-    "--max-tau-side",
-    "8",
-    "--max-out-side",
-    "8",
-    "--max-single-side",
-    "32",
-];
 
 /// The plant with coarse tables of both originals (twig 0, branch 1), as an image.
 fn plant_image(dir: &std::path::Path) -> Vec<u8> {
@@ -40,7 +28,7 @@ fn plant_image(dir: &std::path::Path) -> Vec<u8> {
         "--no-cache",
         "-q",
     ];
-    args.extend(COARSE);
+    args.extend(COARSE_TABLES);
     let out = hirad(&args);
     // Coarse tables miss their targets (exit 1) and are written all the same.
     assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -289,7 +277,7 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
     // `hirad tables` makes the tables of what the policy closes: the crate's, not the lamp's.
     let made = dir.path().join("lamps.hirb");
     let mut args = vec!["tables", s(&scene), "-o", s(&made), "--no-cache"];
-    args.extend(COARSE);
+    args.extend(COARSE_TABLES);
     let out = hirad(&args);
     let (stdout, stderr) = (
         String::from_utf8_lossy(&out.stdout),

@@ -672,3 +672,97 @@ fn fine_visible_fractions_load_averaged_onto_a_coarser_grid() {
         assert!(checked > 0);
     }
 }
+
+/// A closed approximate instance blocks rays with its own polygons, which need not lie where
+/// its original's do (the leaf's own quad here lies beside the original's, out of the
+/// original's box): by default the own quad blocks and the original's place lets light
+/// through; with `own_polygons` 0, or a level's own polygons above it, the reverse. The
+/// census counts them, and the exchange (which lands light on the polygons the tables
+/// know) still meets the original's quad.
+#[test]
+fn closed_approximate_instances_block_with_the_polygons_they_hold() {
+    let (mut s, places) = scene(3);
+    let approx = places[places.len() - 1];
+    let shift = Vec3::new(0.6, 0.0, 0.0);
+    let own_local = [
+        Vec3::new(-0.1, -0.1, 0.0) + shift,
+        Vec3::new(0.1, -0.1, 0.0) + shift,
+        Vec3::new(0.1, 0.1, 0.02) + shift,
+        Vec3::new(-0.1, 0.1, 0.02) + shift,
+    ];
+    let leaf_m = 1;
+    let mut own = Cluster::named("leaf");
+    add_quad(&mut own, own_local, leaf_m);
+    own.instance = Some(InstanceOf {
+        original: 0,
+        exact: false,
+        transform: approx,
+    });
+    *s.root.children.last_mut().unwrap() = own;
+    let bytes = compile(&s).unwrap();
+    let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+    // Through the middle of a quad (local corners), along its normal, 0.4 m each way.
+    let through = |c: [Vec3; 4]| {
+        let w = c.map(|p| approx.point(p));
+        let mid = (w[0] + w[2]) * 0.5;
+        let n = (w[1] - w[0]).cross(w[3] - w[0]).normalize();
+        (mid - 0.4 * n, mid + 0.4 * n)
+    };
+    let original_local = own_local.map(|p| p - shift);
+    let (own_a, own_b) = through(own_local);
+    let (org_a, org_b) = through(original_local);
+    let mut ws = vec![0u8; 64 << 20];
+    let mut scratch = vec![0u8; census_scratch_bytes(&view)];
+    // The level holds one own polygon: at the limit it blocks with it, below it not.
+    for (own_polygons, uses_own) in [(Settings::OWN_POLYGONS, true), (1, true), (0, false)] {
+        let settings = Settings {
+            own_polygons,
+            ..Settings::default()
+        };
+        let c = hirad_core::hr::census_level(
+            &view,
+            settings.max_children,
+            Instancing::Top,
+            hirad_core::hr::Inline::NONE,
+            hirad_core::hr::BlockingLimits::of(&settings),
+            &mut scratch,
+        )
+        .unwrap();
+        assert_eq!(c.own_polygons, u64::from(uses_own), "{own_polygons}");
+        assert_eq!(c.own_bytes > 0, uses_own, "{own_polygons}");
+        load_level(&view, &settings, Instancing::Top, &mut ws, |level| {
+            let i = (0..level.instances())
+                .max_by_key(|&i| level.instance(i).node)
+                .unwrap();
+            let b = level.instance(i).bounds;
+            if uses_own {
+                // Its box holds the quad it blocks with.
+                for p in own_local.map(|p| approx.point(p)) {
+                    assert!(
+                        (b.min - Vec3::splat(1e-4)).cmple(p).all()
+                            && p.cmple(b.max + Vec3::splat(1e-4)).all(),
+                        "{p} outside {b:?}"
+                    );
+                }
+            }
+            let (own_t, org_t) = (
+                level.transmittance(own_a, own_b, None),
+                level.transmittance(org_a, org_b, None),
+            );
+            if uses_own {
+                assert_eq!((own_t, org_t), (0.0, 1.0), "{own_polygons}");
+            } else {
+                assert_eq!((own_t, org_t), (1.0, 0.0), "{own_polygons}");
+            }
+            // Skipped (a ray from its own contents): nothing of it is in the way.
+            assert_eq!(level.transmittance(own_a, own_b, Some(i)), 1.0);
+            // The exchange meets the quad its tables know, halfway.
+            let met = level.first_instance(org_a, org_b, None, 7);
+            let (j, t) = met.expect("the original's quad is met");
+            assert_eq!(j, i);
+            assert!((t - 0.5).abs() < 1e-3, "{t}");
+            assert_eq!(level.first_instance(own_a, own_b, None, 7), None);
+        })
+        .unwrap();
+    }
+}

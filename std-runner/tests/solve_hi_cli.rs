@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fixture, hirad, s};
+use common::{coarse_tables, fixture, hirad, s};
 
 /// Per material, the light absorbed (irradiance less radiosity, both sides, times area; W per
 /// band) and every row's id, from a results CSV.
@@ -44,24 +44,7 @@ fn hierarchical_instantiation_solves_a_plant_of_nested_instances() {
     let image = dir.path().join("plant.hirb");
     let plant = fixture("small_plant.hir");
     // Coarse tables (their targets are not met: exit 1), written all the same.
-    let out = hirad(&[
-        "tables",
-        s(&plant),
-        "-o",
-        s(&image),
-        "--instancing",
-        "all",
-        "--max-side",
-        "4",
-        "--max-tau-side",
-        "8",
-        "--max-out-side",
-        "8",
-        "--max-single-side",
-        "32",
-        "--no-cache",
-        "-q",
-    ]);
+    let out = coarse_tables(&plant, &image);
     assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
     let (hi, hr) = (dir.path().join("hi.csv"), dir.path().join("hr.csv"));
     let stats = dir.path().join("hi.json");

@@ -1,9 +1,10 @@
 //! Closed instances as blockers (DESIGN.md "Instances inside a level"): a ray that crosses a
-//! closed instance's box meets its original's own polygons, placed, when the original is
-//! small enough (see `original_geometry`), else goes on with the weight `tau` of its
-//! direction, the uncollided transmittance of the contents. A small BVH over the instances' world boxes, built in the
-//! workspace when the level is loaded, finds the boxes a segment may cross; each candidate
-//! is tested against its placed (oriented) box.
+//! closed instance's box meets the polygons it blocks with (`State::blocking_geometry`: an
+//! approximate instance's own where the level loads them, else its original's placed, when
+//! small enough, see `original_geometry`), else goes on with the weight `tau` of its
+//! direction, the uncollided transmittance of the contents. A small BVH over the instances'
+//! world boxes, built in the workspace when the level is loaded, finds the boxes a segment
+//! may cross; each candidate is tested against its placed (oriented) box.
 
 use super::error::HrError;
 use super::state::State;
@@ -105,8 +106,8 @@ pub(crate) fn transmittance_towards(
         if skip.contains(&(SKIP_INSTANCE | i)) {
             return false;
         }
-        let (lo, hi, place, slot) = placed_box(st, ws, i);
-        if let Some(g) = st.original_geometry(ws, slot) {
+        let (lo, hi, place, _) = placed_box(st, ws, i);
+        if let Some(g) = st.blocking_geometry(ws, i) {
             // Its own BVH tests its box first.
             if g.blocks(&place, from, to) {
                 t = 0.0;
@@ -163,7 +164,7 @@ pub(crate) fn light_along(
         if i == skip {
             return None;
         }
-        match meets(st, ws, i, from, to, d, t_max)? {
+        match meets(st, ws, i, from, to, d, t_max, Blocking::Own)? {
             Met::Polygon(t, q) => {
                 polygon = q;
                 Some(t)
@@ -200,7 +201,7 @@ pub(crate) fn light_along(
         }
         v
     };
-    for &(_, t, i, q) in &met {
+    for &(at, t, i, q) in &met {
         if t < 1.0 {
             let w = weight * through * (1.0 - t);
             // The polygon met, where the tables keep it apart: its own first scattering
@@ -220,15 +221,34 @@ pub(crate) fn light_along(
                     let side = usize::from(n.dot(placed.local(-d)) < 0.0);
                     Some((r, side))
                 });
-            // The met polygon's height slice, once for every band.
-            let bin = own.as_ref().map_or(0, |_| height_bin(st, ws, i, q));
+            // The met polygon's height slice, once for every band: its original's polygon,
+            // or where the ray met one of the instance's own (see `Blocking::Own`).
+            let own_hit = q == NONE && st.instance(ws, i).own_polygons != 0;
+            let bin = if own.is_some() {
+                height_bin(st, ws, i, q)
+            } else if own_hit {
+                let x = from + (to - from) * at;
+                height_bin_at(
+                    st,
+                    ws,
+                    i,
+                    crate::tables::closed::local_point(&placed.place(), x),
+                )
+            } else {
+                0
+            };
             for (band, o) in out.iter_mut().enumerate() {
                 // (`noted` is the light scattered more than once where the polygon's own
-                // first scattering is read, see `shows_polygons`, shaped by its height.)
+                // first scattering is read, see `shows_polygons`, shaped by its height; all
+                // its light, shaped so, where one of its own polygons is met.)
                 let v = match &own {
                     Some((r, side)) => {
                         let shape: f32 = super::pool::read(ws, profile_at(st, i, bin, band));
                         r.first_radiosity(&placed, q as usize, *side, band) + noted(i, band) * shape
+                    }
+                    None if own_hit => {
+                        let shape: f32 = super::pool::read(ws, profile_at(st, i, bin, band));
+                        noted(i, band) * shape
                     }
                     _ => noted(i, band),
                 };
@@ -286,16 +306,22 @@ fn profile_at(st: &State, i: u32, bin: usize, band: usize) -> usize {
 /// The height slice of polygon `q` of closed instance `i` (see [`HEIGHT_BINS`]).
 fn height_bin(st: &State, ws: &[u8], i: u32, q: u32) -> usize {
     let leaf = st.instance(ws, i);
-    let r = st.slot(ws, leaf.slot).record;
     let Some(g) = st.original_geometry(ws, leaf.slot) else {
         return 0;
     };
     let Some((p, _)) = g.point_on(q, 0.5, 0.5) else {
         return 0;
     };
+    height_bin_at(st, ws, i, p)
+}
+
+/// The height slice of the point `x` in closed instance `i`'s contents' frame (see
+/// [`HEIGHT_BINS`]).
+fn height_bin_at(st: &State, ws: &[u8], i: u32, x: Vec3) -> usize {
+    let r = st.slot(ws, st.instance(ws, i).slot).record;
     let (lo, hi) = (r.lo[2], r.hi[2]);
-    let f = if hi > lo { (p.z - lo) / (hi - lo) } else { 0.0 };
-    ((f * HEIGHT_BINS as f32) as usize).min(HEIGHT_BINS - 1)
+    let f = if hi > lo { (x.z - lo) / (hi - lo) } else { 0.0 };
+    ((f.max(0.0) * HEIGHT_BINS as f32) as usize).min(HEIGHT_BINS - 1)
 }
 
 /// Notes every closed instance's factors by height slice (see [`note_profile`]): once lit,
@@ -315,7 +341,7 @@ pub(crate) fn note_profiles(st: &State, ws: &mut [u8]) {
 fn note_profile(st: &State, ws: &mut [u8], i: u32) {
     let nb = st.bands;
     let mut f = [[1.0f32; crate::limits::MAX_BANDS]; HEIGHT_BINS];
-    if shows_polygons(st, ws, i) {
+    if keeps_polygons(st, ws, i) {
         let placed = st.placed(ws, i);
         if let (Ok(all), Some(single)) = (
             crate::tables::closed::Received::over(&placed, st.received(ws, i)),
@@ -370,6 +396,13 @@ fn radiance(st: &State, ws: &[u8], i: u32, cell: u32, band: usize) -> f32 {
 /// apart): its noted radiance is then that of its light scattered more than once, else
 /// that of all its light.
 fn shows_polygons(st: &State, ws: &[u8], i: u32) -> bool {
+    st.instance(ws, i).own_polygons == 0 && keeps_polygons(st, ws, i)
+}
+
+/// True when closed instance `i`'s tables keep its original's polygons' first scattering
+/// apart and it has those polygons (its light's height profile is known, see
+/// [`note_profile`]).
+fn keeps_polygons(st: &State, ws: &[u8], i: u32) -> bool {
     let slot = st.instance(ws, i).slot;
     st.slot(ws, slot).polygons_kept != 0 && st.original_geometry(ws, slot).is_some()
 }
@@ -429,11 +462,42 @@ enum Met {
     Medium(f32, f32),
 }
 
+/// Which polygons a closed instance that has them meets a segment with (see [`meets`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Blocking {
+    /// Its own where it blocks with them (see `State::blocking_geometry`): a gather ray
+    /// that meets one reads the instance's light, its original's polygons being elsewhere.
+    Own,
+    /// Its original's placed where it stands: the polygon met is one its tables know (the
+    /// exchange lands its light there).
+    Original,
+}
+
 /// What the segment `from..to` (of unit direction `d`) meets of closed instance `i` before
-/// the parameter `t_max`: its first polygon where it has its own (its BVH tests its box
-/// first), else its box as a medium of its `tau`; `None` when neither.
-fn meets(st: &State, ws: &[u8], i: u32, from: Vec3, to: Vec3, d: Vec3, t_max: f32) -> Option<Met> {
+/// the parameter `t_max`: its first polygon where it has polygons to block with (its BVH
+/// tests its box first; the polygon `NONE` where it is one of its own, which its tables do
+/// not know), else its box as a medium of its `tau`; `None` when neither.
+#[allow(clippy::too_many_arguments)]
+fn meets(
+    st: &State,
+    ws: &[u8],
+    i: u32,
+    from: Vec3,
+    to: Vec3,
+    d: Vec3,
+    t_max: f32,
+    blocking: Blocking,
+) -> Option<Met> {
     let (lo, hi, place, slot) = placed_box(st, ws, i);
+    let own = match blocking {
+        Blocking::Own => st.own_geometry(ws, i),
+        Blocking::Original => None,
+    };
+    if let Some(g) = own {
+        return g
+            .first_hit(&place, from, to, t_max)
+            .map(|(_, t)| Met::Polygon(t, NONE));
+    }
     if let Some(g) = st.original_geometry(ws, slot) {
         return g
             .first_hit(&place, from, to, t_max)
@@ -491,8 +555,8 @@ pub(crate) fn transmittance(st: &State, ws: &[u8], from: Vec3, to: Vec3, skip: [
         if skip.contains(&(SKIP_INSTANCE | i)) {
             return false;
         }
-        let (lo, hi, place, slot) = placed_box(st, ws, i);
-        match st.original_geometry(ws, slot) {
+        let (lo, hi, place, _) = placed_box(st, ws, i);
+        match st.blocking_geometry(ws, i) {
             // Its own BVH tests its box first.
             Some(g) => {
                 if g.blocks(&place, from, to) {
@@ -534,7 +598,7 @@ pub(crate) fn first_instance(
         if i == skip {
             return None;
         }
-        let (t, q) = match meets(st, ws, i, from, to, d, t_max)? {
+        let (t, q) = match meets(st, ws, i, from, to, d, t_max, Blocking::Original)? {
             Met::Polygon(t, q) => (t, q),
             Met::Medium(entry, t) => {
                 let (u, _) = crate::sampling::unit2(crate::sampling::hash3(h, i, 0xF1));

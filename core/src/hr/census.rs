@@ -6,7 +6,7 @@
 //! once and remembered in a small caller-provided scratch.
 
 use super::error::HrError;
-use super::settings::{Inline, Instancing};
+use super::settings::{BlockingLimits, Inline, Instancing};
 use crate::image::{SceneSource, SceneView};
 use crate::limits::MAX_NODE_DEPTH;
 use crate::material::TWO_SIDED;
@@ -40,9 +40,15 @@ pub struct Census {
     pub closed_originals: u32,
     /// Zero.
     pub reserved: u32,
-    /// Bytes of the originals whose closed instances block with their own polygons (see
-    /// `Settings::blocking_polygons`), each once.
+    /// Bytes of the polygons closed instances block with (see
+    /// `Settings::blocking_polygons`): their originals', each once, and approximate
+    /// instances' own, each instance's, where they block with them (see `own_polygons`).
     pub blocking_bytes: u64,
+    /// Own polygons of the closed approximate instances that block with them (see
+    /// `Settings::own_polygons`; 0 where the level's are too many), and their bytes.
+    pub own_polygons: u64,
+    /// See `own_polygons`.
+    pub own_bytes: u64,
 }
 
 impl Census {
@@ -73,6 +79,14 @@ impl Census {
         self.received_floats = self
             .received_floats
             .checked_add(o.received_floats)
+            .ok_or(HrError::SceneTooLarge)?;
+        self.own_polygons = self
+            .own_polygons
+            .checked_add(o.own_polygons)
+            .ok_or(HrError::SceneTooLarge)?;
+        self.own_bytes = self
+            .own_bytes
+            .checked_add(o.own_bytes)
             .ok_or(HrError::SceneTooLarge)?;
         Ok(())
     }
@@ -122,21 +136,21 @@ pub fn census<S: SceneSource>(
         max_children,
         Instancing::None,
         Inline::NONE,
-        0,
+        BlockingLimits::NONE,
         scratch,
     )
 }
 
 /// Counts the scene as a solve with `instancing` loads it (the originals `inline` names
-/// expanded in place), closed instances of originals of at most `blocking_polygons`
-/// polygons blocking with them (see `Settings::blocking_polygons`). `scratch` must hold
+/// expanded in place), closed instances blocking with the polygons `blocking` allows (see
+/// `Settings::blocking_polygons`, `Settings::own_polygons`). `scratch` must hold
 /// [`census_scratch_bytes`].
 pub fn census_level<S: SceneSource>(
     view: &SceneView<S>,
     max_children: u32,
     instancing: Instancing,
     inline: Inline<'_>,
-    blocking_polygons: u32,
+    blocking: BlockingLimits,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
     census_at(
@@ -144,7 +158,7 @@ pub fn census_level<S: SceneSource>(
         max_children,
         instancing,
         inline,
-        blocking_polygons,
+        blocking,
         view.info().scene_root.0,
         scratch,
     )
@@ -157,7 +171,7 @@ pub(crate) fn census_at<S: SceneSource>(
     max_children: u32,
     instancing: Instancing,
     inline: Inline<'_>,
-    blocking_polygons: u32,
+    blocking: BlockingLimits,
     root: u32,
     scratch: &mut [u8],
 ) -> Result<Census, HrError> {
@@ -190,7 +204,15 @@ pub(crate) fn census_at<S: SceneSource>(
         }
         return tree(view, root, max_children, two_sided, memo);
     }
-    let mut c = level_tree(view, root, max_children, two_sided, inline, closed)?;
+    let mut c = level_tree(
+        view,
+        root,
+        max_children,
+        two_sided,
+        inline,
+        blocking,
+        closed,
+    )?;
     // The tables of every original with closed instances, each once.
     for k in 0..info.originals {
         if closed[k as usize / 8] & (1 << (k % 8)) == 0 {
@@ -208,12 +230,22 @@ pub(crate) fn census_at<S: SceneSource>(
             .table_bytes
             .checked_add(super::load_instances::as_loaded(&t).visible_bytes())
             .ok_or(HrError::SceneTooLarge)?;
-        if let Some(n) = super::original_geometry::blocking_polygons(view, k, blocking_polygons)? {
+        if let Some(n) = super::original_geometry::blocking_polygons(view, k, blocking.each)? {
             c.blocking_bytes = c
                 .blocking_bytes
                 .checked_add(super::original_geometry::bytes_needed(n) as u64)
                 .ok_or(HrError::SceneTooLarge)?;
         }
+    }
+    // The approximate instances' own polygons, all of them or none.
+    if c.own_polygons <= u64::from(blocking.own) {
+        c.blocking_bytes = c
+            .blocking_bytes
+            .checked_add(c.own_bytes)
+            .ok_or(HrError::SceneTooLarge)?;
+    } else {
+        c.own_polygons = 0;
+        c.own_bytes = 0;
     }
     Ok(c)
 }
@@ -252,13 +284,17 @@ pub(crate) fn subtree_polygons<S: SceneSource>(
     Ok(tree(view, node, 2, &[], memo)?.polygons())
 }
 
-/// A closed instance of `original`: one instance, the floats of the light it receives,
-/// and its original marked in `closed`.
+/// A closed instance of `original` at node `rec`: one instance, the floats of the light it
+/// receives, its own polygons' bytes where it blocks with them (see
+/// `original_geometry::own_blocking_polygons`), and its original marked in `closed`.
 fn closed_instance<S: SceneSource>(
     view: &SceneView<S>,
     original: u32,
+    rec: &crate::image::NodeRecord,
+    blocking: BlockingLimits,
     closed: &mut [u8],
 ) -> Result<Census, HrError> {
+    let own = super::original_geometry::own_blocking_polygons(view, rec, blocking.each)?;
     let t = view
         .table_of(OriginalId(original))?
         .ok_or(HrError::NoTables { original })?;
@@ -273,6 +309,8 @@ fn closed_instance<S: SceneSource>(
             t.scatterers as usize,
             t.incoming_side as usize * t.incoming_side as usize,
         ) as u64,
+        own_polygons: own.map_or(0, u64::from),
+        own_bytes: own.map_or(0, |n| super::original_geometry::bytes_needed(n) as u64),
         ..Census::default()
     })
 }
@@ -298,6 +336,7 @@ fn level_tree<S: SceneSource>(
     max_children: u32,
     two_sided: &[u8],
     inline: Inline<'_>,
+    blocking: BlockingLimits,
     closed: &mut [u8],
 ) -> Result<Census, HrError> {
     let mut stack: heapless::Vec<LevelFrame, MAX_NODE_DEPTH> = heapless::Vec::new();
@@ -338,7 +377,7 @@ fn level_tree<S: SceneSource>(
             Some(id) => {
                 let inst = view.instance(id)?;
                 if !inline.expands(inst.original) {
-                    let leaf = closed_instance(view, inst.original, closed)?;
+                    let leaf = closed_instance(view, inst.original, &rec, blocking, closed)?;
                     top.children += 1;
                     top.acc.add(&leaf)?;
                     continue;

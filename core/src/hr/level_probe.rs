@@ -145,7 +145,7 @@ pub fn load_level<S: SceneSource>(
         settings.max_children,
         instancing,
         super::settings::Inline::NONE,
-        settings.blocking_polygons,
+        super::settings::BlockingLimits::of(settings),
         &mut ws[..need],
     )?;
     let info = view.info();

@@ -99,6 +99,7 @@ pub(crate) fn load<S: SceneSource>(
         table_bytes: 0,
         received_floats: 0,
         blocking_bytes: 0,
+        own_blocking: census.own_polygons > 0,
         instance_change: (0.0, 0.0),
         scene_min: Vec3::ZERO,
         scene_max: Vec3::ZERO,

@@ -55,7 +55,30 @@ pub(super) fn add_instance<S: SceneSource>(
     if s.received_floats + received > lay.n_received_floats() {
         return Err(HrError::SceneTooLarge);
     }
-    let bbox = place.aabb(&Aabb::new(record.lo.into(), record.hi.into()));
+    let mut bbox = place.aabb(&Aabb::new(record.lo.into(), record.hi.into()));
+    // Its own polygons, when it blocks with them: its box then holds them too (an
+    // approximate instance's contents need not lie in its original's box).
+    let own = if s.own_blocking {
+        super::original_geometry::own_blocking_polygons(view, &rec, s.settings.blocking_polygons)?
+    } else {
+        None
+    };
+    let (own_polygons, own_at) = match own {
+        Some(n) => {
+            let at = lay.blocking + s.blocking_bytes;
+            let bytes = super::original_geometry::bytes_needed(n);
+            if at + bytes > lay.blocking_end {
+                return Err(HrError::SceneTooLarge);
+            }
+            super::original_geometry::load_from(view, &mut ws[at..at + bytes], node, n)?;
+            let own_at = u32::try_from(s.blocking_bytes).map_err(|_| HrError::SceneTooLarge)?;
+            s.blocking_bytes += bytes;
+            let held = t.aabb(&Aabb::new(rec.bbox_min.into(), rec.bbox_max.into()));
+            bbox = Aabb::new(bbox.min.min(held.min), bbox.max.max(held.max));
+            (n, own_at)
+        }
+        None => (0, 0),
+    };
     if !bbox.is_finite_nonempty() && bbox.min != bbox.max {
         return Err(HrError::BadGeometry {
             polygon: s.polygons as u64,
@@ -74,6 +97,8 @@ pub(super) fn add_instance<S: SceneSource>(
         node,
         pass,
         area_ref: 0.0,
+        own_polygons,
+        own_at,
     };
     let at = lay.received + 4 * s.received_floats;
     ws[at..at + 4 * received].fill(0);

@@ -76,7 +76,8 @@ pub use open::solve_hi;
 pub use plan::{Plan, plan};
 pub use plan_hi::{HiPlan, plan_hi, plan_hi_scratch_bytes};
 pub use settings::{
-    Inline, Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats, WorkspaceRegions,
+    BlockingLimits, Inline, Instancing, MAX_FINAL_PASSES, RaysByPhase, Settings, Stats,
+    WorkspaceRegions,
 };
 
 use crate::image::{SceneSource, SceneView};

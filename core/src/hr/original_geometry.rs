@@ -3,7 +3,9 @@
 //! original is expanded once per level into its own frame, every instance inside it placed,
 //! with a BVH over it; a segment is taken into a closed instance's frame and tested there,
 //! as ray tracers instance geometry. Its shadows are then the contents' own, where `tau`
-//! alone would shade like a uniform medium.
+//! alone would shade like a uniform medium. An approximate instance's own polygons (its
+//! subtree in the file, see [`own_blocking_polygons`]) are loaded the same way, one region
+//! per instance, from its node instead of its original's root.
 //!
 //! Storage, from a region's first byte: the corners (12 floats per polygon, in the
 //! original's frame, m), the corner counts (one byte each: the count, and [`TWO_SIDED`]),
@@ -32,6 +34,27 @@ pub(crate) fn blocking_polygons<S: SceneSource>(
     limit: u32,
 ) -> Result<Option<u32>, HrError> {
     let n = view.original(OriginalId(original))?.expanded_polygons;
+    let limit = limit.min(MAX_BLOCKING_POLYGONS);
+    Ok((n > 0 && n <= limit as u64).then_some(n as u32))
+}
+
+/// The polygons closed instance node `rec` blocks with of its own, if it does: an
+/// approximate instance (its own subtree is in the file, its original only stands in for it
+/// through the tables) of at most `limit` (and [`MAX_BLOCKING_POLYGONS`]) polygons once
+/// expanded, and at least one. A ray then meets the leaves it really has where it stands,
+/// not its original's placed there (another branch's sunflecks).
+pub(crate) fn own_blocking_polygons<S: SceneSource>(
+    view: &SceneView<S>,
+    rec: &crate::image::NodeRecord,
+    limit: u32,
+) -> Result<Option<u32>, HrError> {
+    let Some(id) = rec.instance() else {
+        return Ok(None);
+    };
+    if view.instance(id)?.is_exact() {
+        return Ok(None);
+    }
+    let n = rec.expanded_polygons;
     let limit = limit.min(MAX_BLOCKING_POLYGONS);
     Ok((n > 0 && n <= limit as u64).then_some(n as u32))
 }
@@ -70,6 +93,19 @@ pub(crate) fn load<S: SceneSource>(
     view: &SceneView<S>,
     region: &mut [u8],
     original: u32,
+    n: u32,
+) -> Result<(), HrError> {
+    let root = view.original(OriginalId(original))?.root;
+    load_from(view, region, root, n)
+}
+
+/// Expands the subtree of node `root` (an original's root, or an approximate instance's
+/// node: its own polygons, see [`own_blocking_polygons`]) of `n` polygons into `region`
+/// (of [`bytes_needed`]`(n)` bytes), in the frame of `root`'s contents, and builds its BVH.
+pub(crate) fn load_from<S: SceneSource>(
+    view: &SceneView<S>,
+    region: &mut [u8],
+    root: u32,
     n: u32,
 ) -> Result<(), HrError> {
     let p = parts(n);
@@ -113,7 +149,6 @@ pub(crate) fn load<S: SceneSource>(
     };
     // The root's own polygons, then its nodes in order; an instance inside is walked in its
     // own frame (an exact one: its original's nodes; an approximate one: its own subtree).
-    let root = view.original(OriginalId(original))?.root;
     let rec = view.node(NodeId(root))?;
     emit(&rec, &Similarity::IDENTITY)?;
     let mut stack: heapless::Vec<Frame, MAX_NODE_DEPTH> = heapless::Vec::new();

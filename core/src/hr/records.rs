@@ -145,6 +145,11 @@ pub(crate) struct InstanceLeaf {
     /// the sphere, the area of an isotropic volume that intercepts as much (see
     /// `instance_kernel`).
     pub area_ref: f32,
+    /// Its own polygons it blocks with (an approximate instance, see
+    /// `original_geometry::own_blocking_polygons`), or 0.
+    pub own_polygons: u32,
+    /// Byte offset of their region from the blocking regions' start, when `own_polygons > 0`.
+    pub own_at: u32,
 }
 
 impl InstanceLeaf {

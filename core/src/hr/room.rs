@@ -89,7 +89,7 @@ pub(crate) fn rooms<S: SceneSource>(
             settings.max_children,
             Instancing::Top,
             inline,
-            settings.blocking_polygons,
+            super::settings::BlockingLimits::of(settings),
             root,
             scratch,
         )

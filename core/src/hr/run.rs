@@ -109,7 +109,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             settings.max_children,
             instancing,
             level.inline,
-            settings.blocking_polygons,
+            super::settings::BlockingLimits::of(settings),
             level.node,
             &mut ws[..need],
         )?;

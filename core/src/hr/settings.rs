@@ -92,6 +92,36 @@ pub struct Settings {
     /// blocks by `tau`. Costs about 120 bytes per polygon of each such original, once per
     /// level.
     pub blocking_polygons: u32,
+    /// A level's closed approximate instances (their own polygons are in the file, their
+    /// original only stands in for them through its tables) block rays with their own
+    /// polygons, each of at most [`Settings::blocking_polygons`], when all of them together
+    /// hold at most this many: a ray then meets the leaves an instance really has where it
+    /// stands, not its original's placed there. Else they block as their original does.
+    /// 0: never. Costs about 120 bytes per polygon, per level.
+    pub own_polygons: u32,
+}
+
+/// How many polygons closed instances may block with (see [`Settings::blocking_polygons`]
+/// and [`Settings::own_polygons`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BlockingLimits {
+    /// Most polygons of an original, or of an approximate instance's own.
+    pub each: u32,
+    /// Most own polygons of a level's approximate instances together.
+    pub own: u32,
+}
+
+impl BlockingLimits {
+    /// The limits `settings` asks for.
+    pub fn of(settings: &Settings) -> Self {
+        BlockingLimits {
+            each: settings.blocking_polygons,
+            own: settings.own_polygons,
+        }
+    }
+
+    /// No polygons: every closed instance blocks by `tau`.
+    pub const NONE: BlockingLimits = BlockingLimits { each: 0, own: 0 };
 }
 
 /// Most final gather passes.
@@ -106,6 +136,8 @@ impl Settings {
     pub const MAX_FINAL_RAYS: u32 = 1 << 20;
     /// Default of [`Settings::blocking_polygons`].
     pub const BLOCKING_POLYGONS: u32 = 16_384;
+    /// Default of [`Settings::own_polygons`].
+    pub const OWN_POLYGONS: u32 = 1 << 17;
 
     /// Checks every setting's range.
     pub fn check(&self) -> Result<(), HrError> {
@@ -161,6 +193,7 @@ impl Default for Settings {
             final_passes: Settings::AUTO,
             sun_sides: Settings::BOTH_SIDES,
             blocking_polygons: Settings::BLOCKING_POLYGONS,
+            own_polygons: Settings::OWN_POLYGONS,
         }
     }
 }

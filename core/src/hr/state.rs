@@ -91,6 +91,9 @@ pub(crate) struct State {
     pub received_floats: usize,
     /// Bytes of the blocking region used (see `original_geometry`).
     pub blocking_bytes: usize,
+    /// True when the level's closed approximate instances block with their own polygons
+    /// (see `Settings::own_polygons`; the census decided it for the level as a whole).
+    pub own_blocking: bool,
     /// The last gather's largest change of a closed instance's mean radiosity and the
     /// largest such radiosity (W/m^2; see `instance_light::gather_instances`).
     pub instance_change: (f32, f32),

@@ -130,6 +130,13 @@ pub struct Args {
     /// 1,048,575 count as that.
     #[arg(long, default_value_t = Settings::BLOCKING_POLYGONS)]
     pub blocking_polygons: u32,
+    /// A level's closed approximate instances (hi; each its own geometry in the file, its
+    /// original standing in for it through the tables) block rays with their own polygons,
+    /// each of at most --blocking-polygons, when all of them together hold at most this
+    /// many (about 120 bytes of workspace each, per level): a ray meets the leaves really
+    /// there. Else they block as their original does. 0: never.
+    #[arg(long, default_value_t = Settings::OWN_POLYGONS)]
+    pub own_polygons: u32,
     /// Final gather (hr): rays per receiving side of every polygon, from which each polygon
     /// takes its own light; `auto` spreads about a million rays over the scene (64 to 16384
     /// per side), `0` keeps the hierarchy's irradiance (faster, right on average only).
@@ -505,6 +512,7 @@ pub fn run(a: Args) -> Result<()> {
                 tolerance: a.tolerance,
                 max_iterations: a.max_iterations,
                 blocking_polygons: a.blocking_polygons,
+                own_polygons: a.own_polygons,
                 ..Settings::default()
             };
             let run = if a.method == Method::Hi {

@@ -270,14 +270,43 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     // Hierarchical instantiation holds one path of levels: without a budget it gets its own
     // plan's suggestion (the top level's estimated plan and room for its widest closed
     // instances side by side), whatever the expanded scene would need.
+    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    let mut settings = *settings;
     let hi_plan = match hi_inline {
         Some(inline) => {
             let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
-            Some(hr::plan_hi(view, settings, inline, threads, &mut scratch).map_err(classify)?)
+            let mut p =
+                hr::plan_hi(view, &settings, inline, threads, &mut scratch).map_err(classify)?;
+            // A budget below the plan with the approximate instances' own polygons: they
+            // block as their originals do, if that lets every level open.
+            if let Some(m) = memory
+                && m < p.min_bytes
+                && settings.own_polygons > 0
+            {
+                let without = Settings {
+                    own_polygons: 0,
+                    ..settings
+                };
+                let q =
+                    hr::plan_hi(view, &without, inline, threads, &mut scratch).map_err(classify)?;
+                if q.min_bytes < p.min_bytes {
+                    if progress.enabled() {
+                        eprintln!(
+                            "note: --memory {:.1} MiB is less than the {:.1} MiB with which hi's plan surely opens every level with closed approximate instances blocking by their own polygons: they block as their originals do ({:.1} MiB; --own-polygons 0)",
+                            mib(m),
+                            mib(p.min_bytes),
+                            mib(q.min_bytes)
+                        );
+                    }
+                    settings = without;
+                    p = q;
+                }
+            }
+            Some(p)
         }
         None => None,
     };
-    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    let settings = &settings;
     let size = match (memory, hi_plan) {
         // Below hi's least with its margin a level may find too little room hours in: say
         // so before the solve starts (it tries: the paper stand ran in 34 MiB against a

@@ -119,3 +119,32 @@ impl hirad_core::sink::Sink for Nothing {
         Ok(())
     }
 }
+
+/// Grids of `hirad tables` coarse enough for a test (their targets are not met: exit 1).
+pub const COARSE_TABLES: [&str; 8] = [
+    "--max-side",
+    "4",
+    "--max-tau-side",
+    "8",
+    "--max-out-side",
+    "8",
+    "--max-single-side",
+    "32",
+];
+
+/// `hirad tables SCENE -o OUT --instancing all` on [`COARSE_TABLES`], uncached: the image
+/// is written though the targets are not met.
+pub fn coarse_tables(scene: &Path, out: &Path) -> Output {
+    let mut args = vec![
+        "tables",
+        s(scene),
+        "-o",
+        s(out),
+        "--instancing",
+        "all",
+        "--no-cache",
+        "-q",
+    ];
+    args.extend(COARSE_TABLES);
+    hirad(&args)
+}

@@ -80,6 +80,35 @@ impl State {
         )
     }
 
+    /// Closed instance `i`'s own polygons, when it blocks with them (an approximate
+    /// instance, see `original_geometry::own_blocking_polygons`), in its contents' frame.
+    pub(crate) fn own_geometry<'a>(
+        &self,
+        ws: &'a [u8],
+        i: u32,
+    ) -> Option<crate::hr::original_geometry::OriginalGeometry<'a>> {
+        let leaf = self.instance(ws, i);
+        if leaf.own_polygons == 0 {
+            return None;
+        }
+        crate::hr::original_geometry::OriginalGeometry::over(
+            ws.get(self.lay.blocking + leaf.own_at as usize..self.lay.blocking_end)?,
+            leaf.own_polygons,
+        )
+    }
+
+    /// The polygons closed instance `i` blocks rays with, if any: its own (see
+    /// [`Self::own_geometry`]), else its original's placed where it stands (see
+    /// [`Self::original_geometry`]).
+    pub(crate) fn blocking_geometry<'a>(
+        &self,
+        ws: &'a [u8],
+        i: u32,
+    ) -> Option<crate::hr::original_geometry::OriginalGeometry<'a>> {
+        self.own_geometry(ws, i)
+            .or_else(|| self.original_geometry(ws, self.instance(ws, i).slot))
+    }
+
     /// Closed instance `i`'s original's tables, placed by its transform.
     pub(crate) fn placed<'a>(&self, ws: &'a [u8], i: u32) -> crate::tables::closed::Placed<'a> {
         let leaf = self.instance(ws, i);
