@@ -569,7 +569,12 @@ fn lit_fraction<V: Visibility + ?Sized>(
 
 /// Adds the sky's direct light to `direct` (per side and band): `count` samples, each at a
 /// stratified point of the patch with a direction drawn by irradiance x |cosine| (front
-/// directions for one-sided patches).
+/// directions for one-sided patches). In an opened level the scene's sky directions and the
+/// beams of the light its instance received through links are drawn apart, `count` samples
+/// each: drawn together, the beams (strong in the near infrared, where leaves scatter most)
+/// took most of the samples, and the sky of a leaf deep in a crown, seen through a few
+/// gaps, was left to a handful (the paper poplar's dimmest leaves' PAR was off by a median of
+/// 18% against hr's 11%).
 #[allow(clippy::too_many_arguments)]
 fn sky_light<V: Visibility + ?Sized>(
     st: &State,
@@ -584,18 +589,59 @@ fn sky_light<V: Visibility + ?Sized>(
     [direct, linked]: [&mut [[f32; 8]; 2]; 2],
     rays: &mut u32,
 ) {
+    for beams in [false, true] {
+        sky_group(
+            st,
+            ws,
+            e,
+            p,
+            corners,
+            normal,
+            sides,
+            count,
+            vis,
+            beams,
+            [&mut *direct, &mut *linked],
+            rays,
+        );
+    }
+}
+
+/// [`sky_light`] of one group of the sources after the suns: the scene's sky directions
+/// (`beams` false) or the beams of light that came through links (`beams` true: those
+/// whose rays see only some outer levels, see `records::Source::outer`).
+#[allow(clippy::too_many_arguments)]
+fn sky_group<V: Visibility + ?Sized>(
+    st: &State,
+    ws: &[u8],
+    e: Elem,
+    p: &Patch,
+    corners: &[Vec3],
+    normal: Vec3,
+    sides: usize,
+    count: u32,
+    vis: &V,
+    beams: bool,
+    [direct, linked]: [&mut [[f32; 8]; 2]; 2],
+    rays: &mut u32,
+) {
     let nb = st.bands;
     let first = st.suns;
     let total_sources = st.sources;
     if total_sources <= first {
         return;
     }
-    // Weights: the largest band's irradiance times |cosine|, on the sides the patch has.
+    // Weights: the largest band's irradiance times |cosine|, on the sides the patch has, for
+    // the group's sources.
     let weight = |k: u32| -> (f32, usize, f32) {
         let src: Source = super::pool::read(ws, st.at(ws, Elem::new(Kind::Source, k)));
         let c = normal.dot(Vec3::from(src.towards));
         let side = if c > 0.0 { 0 } else { 1 };
-        if c == 0.0 || side >= sides || st.settings.sun_sides & (1 << side) == 0 {
+        if c == 0.0
+            || side >= sides
+            || st.settings.sun_sides & (1 << side) == 0
+            || (src.outer != NONE) != beams
+        {
             return (0.0, side, c);
         }
         let irr = st.b(ws, Elem::new(Kind::Source, k), 0).unwrap_or(&[]);
@@ -610,7 +656,11 @@ fn sky_light<V: Visibility + ?Sized>(
         return;
     }
     let grid = libm::floorf(libm::sqrtf(count as f32)).max(1.0) as u32;
-    let seed = hash3(e.0, 0x5C1, p.poly);
+    let seed = if beams {
+        hash3(e.0, 0xBEA, p.poly)
+    } else {
+        hash3(e.0, 0x5C1, p.poly)
+    };
     let inv = w_total / count as f32;
     // Directions are stratified over the weights' CDF in sample order; points over a grid
     // in a shuffled order (a stride coprime with the count), so the two do not align.
