@@ -58,7 +58,14 @@ impl Cache {
         h.update(MAGIC);
         h.update(&BAKE_VERSION.to_le_bytes());
         h.update(&[scene.bands]);
-        h.update(format!("{settings:?}").as_bytes());
+        // A bake's hr solves expand the original: a setting only closed instances read
+        // is left out, so that adding one keeps every entry made before it (they are the
+        // same tables).
+        let text = format!("{settings:?}").replace(
+            &format!(", own_polygons: {}", settings.solve.own_polygons),
+            "",
+        );
+        h.update(text.as_bytes());
         h.update(&(alone.polygons.len() as u64).to_le_bytes());
         for (p, &m) in alone.polygons.iter().zip(&alone.materials) {
             h.update(&[p.len() as u8]);
@@ -165,4 +172,31 @@ fn decode(b: &[u8], key: &Key, name: &str, index: usize) -> Option<OriginalTable
     // The values must make sound tables (ranges, lengths, box), as the image's would.
     t.try_view().ok()?;
     Some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A setting that only closed instances read leaves every key as it was (the bake's hr
+    /// solves expand the original), so that the entries made before it stay valid; a
+    /// setting the bake reads changes it.
+    #[test]
+    fn keys_ignore_what_only_closed_instances_read() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/small_plant.hir");
+        let scene = crate::text::parse(&std::fs::read(path).unwrap()).unwrap();
+        let alone = crate::tables::Alone::new(&scene, 0).unwrap();
+        let settings = TableSettings::default();
+        let key = Cache::key(&scene, &alone, &settings);
+        for own_polygons in [0, 1, u32::MAX] {
+            let mut other = settings;
+            other.solve.own_polygons = own_polygons;
+            assert_eq!(Cache::key(&scene, &alone, &other), key, "{own_polygons}");
+        }
+        let mut finer = settings;
+        finer.solve.epsilon *= 0.5;
+        assert_ne!(Cache::key(&scene, &alone, &finer), key);
+        let other = crate::tables::Alone::new(&scene, 1).unwrap();
+        assert_ne!(Cache::key(&scene, &other, &settings), key);
+    }
 }
