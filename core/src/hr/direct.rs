@@ -237,26 +237,29 @@ fn prepare<V: Visibility + ?Sized>(
             }
             shadow += e_max * p.area * 2.0 * lit.min(1.0 - lit);
         }
-        // Sky: one importance-sampled direction per sample.
+        // Sky: one importance-sampled direction per sample; the links' beams apart.
         let root_area = st.patch(ws, Elem(poly.root)).area;
         let sky = sky_samples(
             root_area / st.typical_area,
             p.area / root_area,
             st.settings.rays,
         );
-        sky_light(
-            st,
-            ws,
-            e,
-            p,
-            corners,
-            normal,
-            sides,
-            sky,
-            vis,
-            [&mut direct, &mut linked],
-            &mut rays,
-        );
+        for beams in [false, true] {
+            sky_light(
+                st,
+                ws,
+                e,
+                p,
+                corners,
+                normal,
+                sides,
+                sky,
+                vis,
+                beams,
+                [&mut direct, &mut linked],
+                &mut rays,
+            );
+        }
         // The patch's irradiance is the mean over its exposed part; buried parts are dark.
         let scale = if out[1] > 0.0 { 1.0 / out[1] } else { 0.0 };
         let apart = st.lay.strides.links_apart;
@@ -567,51 +570,17 @@ fn lit_fraction<V: Visibility + ?Sized>(
     }
 }
 
-/// Adds the sky's direct light to `direct` (per side and band): `count` samples, each at a
-/// stratified point of the patch with a direction drawn by irradiance x |cosine| (front
-/// directions for one-sided patches). In an opened level the scene's sky directions and the
-/// beams of the light its instance received through links are drawn apart, `count` samples
-/// each: drawn together, the beams (strong in the near infrared, where leaves scatter most)
+/// Adds the direct light of one group of the sources after the suns to `direct` (per side
+/// and band), the scene's sky directions (`beams` false) or the beams of light that came
+/// through links (`beams` true: those whose rays see only some outer levels, see
+/// `records::Source::outer`): `count` samples, each at a stratified point of the patch with
+/// a direction drawn by irradiance x |cosine| (front directions for one-sided patches). The
+/// two groups are drawn apart, `count` samples each: drawn together, the beams (strong in the near infrared, where leaves scatter most)
 /// took most of the samples, and the sky of a leaf deep in a crown, seen through a few
 /// gaps, was left to a handful (the paper poplar's dimmest leaves' PAR was off by a median of
 /// 18% against hr's 11%).
 #[allow(clippy::too_many_arguments)]
 fn sky_light<V: Visibility + ?Sized>(
-    st: &State,
-    ws: &[u8],
-    e: Elem,
-    p: &Patch,
-    corners: &[Vec3],
-    normal: Vec3,
-    sides: usize,
-    count: u32,
-    vis: &V,
-    [direct, linked]: [&mut [[f32; 8]; 2]; 2],
-    rays: &mut u32,
-) {
-    for beams in [false, true] {
-        sky_group(
-            st,
-            ws,
-            e,
-            p,
-            corners,
-            normal,
-            sides,
-            count,
-            vis,
-            beams,
-            [&mut *direct, &mut *linked],
-            rays,
-        );
-    }
-}
-
-/// [`sky_light`] of one group of the sources after the suns: the scene's sky directions
-/// (`beams` false) or the beams of light that came through links (`beams` true: those
-/// whose rays see only some outer levels, see `records::Source::outer`).
-#[allow(clippy::too_many_arguments)]
-fn sky_group<V: Visibility + ?Sized>(
     st: &State,
     ws: &[u8],
     e: Elem,
