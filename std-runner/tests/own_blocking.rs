@@ -161,3 +161,86 @@ fn closed_approximate_instances_shade_with_their_own_polygons() {
         }
     }
 }
+
+/// A `--memory` budget between hi's least without the approximate instances' own polygons
+/// and its least with them turns them off (a note says so; the stats say so and count no
+/// instance blocking with them) rather than risking a level that does not fit; at the least
+/// with them they stay on. Two sizes of the panels' scene.
+#[test]
+fn a_budget_below_the_least_with_own_polygons_turns_them_off() {
+    use hirad_core::hr::{Inline, Settings, plan_hi, plan_hi_scratch_bytes};
+    use hirad_core::image::{SceneView, SliceSource};
+    let dir = tempfile::tempdir().unwrap();
+    for (n, count, seed) in [(6u32, 5u32, 1u32), (9, 14, 4)] {
+        let (text, _) = panels(n, count, seed);
+        let scene = write(dir.path(), &format!("budget_{seed}.hir"), &text);
+        let image = dir.path().join(format!("budget_{seed}.hirb"));
+        let out = coarse_tables(&scene, &image);
+        assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+        let bytes = std::fs::read(&image).unwrap();
+        let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+        let mut scratch = vec![0u8; plan_hi_scratch_bytes(&view)];
+        let on = Settings::default();
+        let off = Settings {
+            own_polygons: 0,
+            ..on
+        };
+        // The command line's thread count: the plan leaves room for siblings side by side.
+        let least = |s: &Settings, scratch: &mut [u8]| {
+            plan_hi(&view, s, Inline::NONE, 2, scratch)
+                .unwrap()
+                .min_bytes
+        };
+        let (with, without) = (least(&on, &mut scratch), least(&off, &mut scratch));
+        assert!(without < with, "n {n}: {without} vs {with}");
+        let run = |memory: u64| -> (String, serde_json::Value) {
+            let stats = dir.path().join(format!("budget_{seed}_{memory}.json"));
+            let m = memory.to_string();
+            let out = hirad(&[
+                "solve",
+                s(&image),
+                "--method",
+                "hi",
+                "--instancing",
+                "all",
+                "--threads",
+                "2",
+                "--memory",
+                &m,
+                "--stats",
+                s(&stats),
+            ]);
+            let err = String::from_utf8_lossy(&out.stderr).into_owned();
+            assert!(out.status.success(), "n {n}, --memory {m}: {err}");
+            let json = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+            (err, json)
+        };
+        let (err, json) = run((with + without) / 2);
+        assert!(
+            err.contains("they block as their originals do"),
+            "n {n}: no note: {err}"
+        );
+        assert_eq!(
+            json["levels"]["own_polygons"], 0,
+            "n {n}: {}",
+            json["levels"]
+        );
+        assert_eq!(json["levels"]["own_blocking_instances"], 0, "n {n}");
+        assert_eq!(
+            json["settings"]["own_polygons"],
+            Settings::OWN_POLYGONS,
+            "n {n}"
+        );
+        let (err, json) = run(with);
+        assert!(
+            !err.contains("they block as their originals do"),
+            "n {n}: {err}"
+        );
+        assert_eq!(
+            json["levels"]["own_polygons"],
+            Settings::OWN_POLYGONS,
+            "n {n}"
+        );
+        assert_eq!(json["levels"]["own_blocking_instances"], count, "n {n}");
+    }
+}

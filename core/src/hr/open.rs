@@ -296,6 +296,9 @@ where
     add_level(total, &st.stats, origin, depth == 0);
     total.level_depth = total.level_depth.max(depth as u32);
     total.closed_instances += st.instances as u64;
+    total.own_blocking_instances += (0..st.instances)
+        .filter(|&i| st.instance(ws, i).own_polygons != 0)
+        .count() as u64;
     if depth == 0 {
         let written = super::exchange::bytes_written(&st, ws);
         total.top_regions = st.lay.regions(st.blocks.used, written);

@@ -257,6 +257,9 @@ pub struct Stats {
     pub level_depth: u32,
     /// Closed instances over all levels.
     pub closed_instances: u64,
+    /// Closed approximate instances that blocked rays with the polygons they hold, over all
+    /// levels (see [`Settings::own_polygons`]).
+    pub own_blocking_instances: u64,
     /// Levels solved in jobs beside their siblings' (see [`super::Executor::run_jobs`]),
     /// the levels opened inside them included.
     pub levels_together: u64,

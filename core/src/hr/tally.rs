@@ -38,6 +38,7 @@ impl Tally {
         add_level(t, l, 0, false);
         t.level_depth = t.level_depth.max(l.level_depth);
         t.closed_instances += l.closed_instances;
+        t.own_blocking_instances += l.own_blocking_instances;
         t.levels_together += l.levels_together;
         t.opened_again += l.opened_again;
         t.largest_level = t.largest_level.max(l.largest_level);
@@ -68,6 +69,7 @@ pub(super) fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bo
             total.peak_bytes,
             total.level_depth,
             total.closed_instances,
+            total.own_blocking_instances,
             total.largest_level,
             total.leaf_histogram,
             total.peak_bytes_by_depth,
@@ -78,6 +80,7 @@ pub(super) fn add_level(total: &mut Stats, level: &Stats, origin: usize, top: bo
             total.peak_bytes,
             total.level_depth,
             total.closed_instances,
+            total.own_blocking_instances,
             total.largest_level,
             total.leaf_histogram,
             total.peak_bytes_by_depth,

@@ -478,6 +478,7 @@ pub fn run(a: Args) -> Result<()> {
             memory_bytes: if hr { a.memory } else { None },
             visibility: hr.then(|| format!("{:?}", a.visibility).to_lowercase()),
             blocking_polygons: (a.method == Method::Hi).then_some(a.blocking_polygons),
+            own_polygons: (a.method == Method::Hi).then_some(a.own_polygons),
             instancing: instancing.map(|p| p.to_string()),
             elements: (!hr).then_some(a.elements),
             threads: a.threads.map(u32::from),
@@ -560,7 +561,8 @@ pub fn run(a: Args) -> Result<()> {
                 final_gather: s.rays_by_phase.final_gather,
             });
             report.final_passes = Some(s.final_passes);
-            report.levels = (a.method == Method::Hi).then(|| crate::output::Levels::of(&s));
+            report.levels =
+                (a.method == Method::Hi).then(|| crate::output::Levels::of(&s, run.own_polygons));
             report.final_change_percent =
                 Some(100.0 * s.final_change as f64).filter(|_| s.final_passes > 1);
             report.phases = tables_made

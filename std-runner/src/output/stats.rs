@@ -73,6 +73,10 @@ pub struct RunSettings {
     /// polygons block with them, larger ones by `tau`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blocking_polygons: Option<u32>,
+    /// `--own-polygons` (hi) as asked: a level's closed approximate instances block with the
+    /// polygons they hold when they hold at most this many together.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub own_polygons: Option<u32>,
     /// `--instancing` (hi): `all` (every level's instances closed, then opened in turn) or
     /// `none` (every instance expanded: hr's solver and results).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -132,6 +136,13 @@ pub struct Levels {
     pub deepest: u32,
     /// Closed instances over all levels.
     pub closed_instances: u64,
+    /// `--own-polygons` as solved: as asked, or 0 where a `--memory` budget below hi's
+    /// least with them turned them off.
+    #[serde(default)]
+    pub own_polygons: u32,
+    /// Closed approximate instances that blocked rays with the polygons they hold.
+    #[serde(default)]
+    pub own_blocking_instances: u64,
     /// Levels solved in jobs beside their siblings' (opened together, one per thread).
     #[serde(default)]
     pub levels_together: u64,
@@ -205,7 +216,8 @@ pub struct LeafBin {
 
 impl Levels {
     /// The levels of a solve's statistics.
-    pub fn of(s: &hirad_core::hr::Stats) -> Levels {
+    /// `own_polygons`: `Settings::own_polygons` as solved.
+    pub fn of(s: &hirad_core::hr::Stats, own_polygons: u32) -> Levels {
         let leaf_histogram = s
             .leaf_histogram
             .iter()
@@ -222,6 +234,8 @@ impl Levels {
             solved: s.levels,
             deepest: s.level_depth,
             closed_instances: s.closed_instances,
+            own_polygons,
+            own_blocking_instances: s.own_blocking_instances,
             levels_together: s.levels_together,
             opened_again: s.opened_again,
             largest_level_leaves: s.largest_level,
@@ -483,12 +497,13 @@ impl SolveReport {
                 .collect();
             writeln!(
                 out,
-                "  levels: {} solved (deepest {}; {} of them beside their siblings', {} opened again alone), {} closed instances; levels by leaf elements {}; peak workspace by depth {}",
+                "  levels: {} solved (deepest {}; {} of them beside their siblings', {} opened again alone), {} closed instances ({} blocking with their own polygons); levels by leaf elements {}; peak workspace by depth {}",
                 l.solved,
                 l.deepest,
                 l.levels_together,
                 l.opened_again,
                 l.closed_instances,
+                l.own_blocking_instances,
                 bins.join(", "),
                 peaks.join(", ")
             )?;

@@ -39,6 +39,8 @@ pub struct HrRun {
     pub plan: Plan,
     /// Threads used.
     pub threads: usize,
+    /// `Settings::own_polygons` as solved: the setting, or 0 where a budget turned it off.
+    pub own_polygons: u32,
 }
 
 /// World-space corners of every polygon of the expanded scene, in global-id order.
@@ -420,5 +422,6 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
         phases,
         plan,
         threads: exec.threads(),
+        own_polygons: settings.own_polygons,
     })
 }
