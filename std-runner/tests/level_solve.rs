@@ -464,7 +464,7 @@ fn the_hi_plan_is_what_the_solve_needs() {
         let bytes = compile(&s).unwrap();
         let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
         let mut scratch = vec![0u8; plan_hi_scratch_bytes(&view)];
-        let plan = plan_hi(&view, &settings, Inline::NONE, 2, &mut scratch).unwrap();
+        let plan = plan_hi(&view, &settings, Inline::NONE, &mut scratch).unwrap();
         let case = format!("{nx} x {ny} plants: {plan:?}");
         println!("{case}");
         assert!(plan.min_bytes < plan.suggested_bytes, "{case}");

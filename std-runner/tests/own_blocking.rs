@@ -185,11 +185,8 @@ fn a_budget_below_the_least_with_own_polygons_turns_them_off() {
             own_polygons: 0,
             ..on
         };
-        // The command line's thread count: the plan leaves room for siblings side by side.
         let least = |s: &Settings, scratch: &mut [u8]| {
-            plan_hi(&view, s, Inline::NONE, 2, scratch)
-                .unwrap()
-                .min_bytes
+            plan_hi(&view, s, Inline::NONE, scratch).unwrap().min_bytes
         };
         let (with, without) = (least(&on, &mut scratch), least(&off, &mut scratch));
         assert!(without < with, "n {n}: {without} vs {with}");

@@ -33,11 +33,22 @@ pub trait Executor {
         1
     }
 
-    /// Runs `work(k, &mut jobs[k])` for every job, in any order and possibly concurrently;
-    /// each job owns its element. The default runs them one after another.
-    fn run_jobs<T: Send>(&mut self, jobs: &mut [T], work: &(dyn Fn(usize, &mut T) + Sync)) {
+    /// Runs `work(k, &mut jobs[k], part)` for every job, in any order and possibly
+    /// concurrently; each job owns its element and is handed one of `parts` that no job
+    /// running at the same time holds (as many parts as [`Executor::parallelism`], or
+    /// fewer: no more jobs run at once than there are parts). The default runs them one
+    /// after another in `parts[0]`. Runs nothing when `parts` is empty.
+    fn run_jobs<T: Send, P: Send>(
+        &mut self,
+        jobs: &mut [T],
+        parts: &mut [P],
+        work: &(dyn Fn(usize, &mut T, &mut P) + Sync),
+    ) {
+        let Some(part) = parts.first_mut() else {
+            return;
+        };
         for (k, job) in jobs.iter_mut().enumerate() {
-            work(k, job);
+            work(k, job, part);
         }
     }
 }

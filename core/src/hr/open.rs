@@ -26,7 +26,7 @@ use super::level::LevelRoot;
 use super::room::Rooms;
 use super::run::Run;
 use super::settings::{Inline, Instancing, Settings, Stats};
-use super::siblings::{Item, MAX_JOBS, open_batch};
+use super::siblings::{BATCH_PER_WORKER, Batch, Entry, Item, MAX_JOBS, ROOMS_KEPT, open_batch};
 use super::state::State;
 use super::tally::{Tally, add_level};
 use crate::NodeId;
@@ -233,19 +233,15 @@ where
     // Refined by the scene's threshold: the top level's power, not the contents' own; in
     // what the workspace holds once its children's room is left free.
     run.st.unit_power = ctx.shared.unit_power;
-    // Siblings opened side by side each take an equal part, half of it for the record of
-    // what they hand out (see `siblings`): room for twice as many.
-    let together = match run.seq.inner.parallelism().clamp(1, MAX_JOBS) as u64 {
-        1 => 1,
-        n => 2 * n,
-    };
+    // Room for its children as `siblings::ROOMS_KEPT` says, whatever the threads: a level
+    // refines alike whether it is opened alone or as a job, on one thread or many.
     let b = run.st.blocks;
     run.st.blocks.total = super::room::capped_total(
         b.total,
         b.used,
         b.size,
         root.children,
-        together,
+        ROOMS_KEPT,
         root.own_growth,
     );
     run.st.scene_sides = ctx.shared.scene_sides;
@@ -321,11 +317,18 @@ where
     // entered (and numbered, see `InstanceLeaf::pass`) in the same order.
     let mut stack: heapless::Vec<Walk, MAX_NODE_DEPTH> = heapless::Vec::new();
     let mut passes = 0u32;
-    // Closed instances waiting to be opened, as many together as the executor runs jobs.
-    let mut batch: heapless::Vec<Item<'_>, MAX_JOBS> = heapless::Vec::new();
-    let together = exec.parallelism().clamp(1, MAX_JOBS);
-    // Opens the waiting instances, if any (before the level's next own polygons, when the
-    // batch is full, and at the end).
+    // Closed instances waiting to be opened, with the level's own polygons between them
+    // (handed out in order after the instances before them): as jobs, BATCH_PER_WORKER for
+    // each job the executor runs at once (workers take them one by one, so that uneven
+    // siblings keep them all busy), or one by one alone.
+    let mut batch: Batch<'_> = heapless::Vec::new();
+    let mut waiting = 0usize;
+    let together = match exec.parallelism().clamp(1, MAX_JOBS) {
+        1 => 1,
+        n => (n * BATCH_PER_WORKER).min(MAX_JOBS),
+    };
+    // Opens the waiting instances and hands out the polygons between them, if any (when
+    // the batch is full, and at the end).
     macro_rules! open_pending {
         () => {
             if !batch.is_empty() {
@@ -337,6 +340,7 @@ where
                     free,
                     origin + used,
                     exec,
+                    scratch,
                     &batch,
                     depth,
                 )?;
@@ -380,33 +384,31 @@ where
                     node = view.original(inst.original())?.root;
                 }
             } else {
-                // Closed: opened below, together with the siblings that follow it (no own
-                // polygon between them: `pending` is empty while the batch holds any).
-                flush(
-                    ctx,
-                    &st,
-                    mine,
-                    &vis,
-                    exec,
-                    scratch,
-                    polygon,
-                    &mut pending,
-                    next_id,
-                )?;
+                // Closed: opened below, together with the siblings that follow it, after
+                // the level's polygons before it.
+                if pending > 0 {
+                    let _ = batch.push(Entry::Own {
+                        polygon,
+                        count: core::mem::take(&mut pending),
+                        next_id,
+                    });
+                }
                 let leaf = find_instance(&st, mine, i, pass);
                 let (node, place) = contents(view, &st, mine, leaf, i)?;
                 let count = subtree_polygons(view, node, ctx.shared.memo)?;
                 if count > 0 {
-                    let _ = batch.push(Item {
+                    let _ = batch.push(Entry::Child(Item {
                         leaf,
                         node,
                         place,
                         first_id: next_id,
                         inline: root.inline,
                         original: inst.original,
-                    });
-                    if batch.len() >= together {
+                    }));
+                    waiting += 1;
+                    if waiting >= together {
                         open_pending!();
+                        waiting = 0;
                     }
                 }
                 next_id += count;
@@ -415,9 +417,6 @@ where
         }
         // The level's own polygons, in load order (its nodes depth first).
         let own = enter(node, pass_in, &mut stack)?;
-        if own > 0 {
-            open_pending!();
-        }
         polygon += own;
         pending += own;
         next_id += own as u64;
@@ -440,7 +439,7 @@ where
 /// Hands the `pending` level polygons before `polygon` to the sink, the last of them with
 /// global id `next_id - 1`.
 #[allow(clippy::too_many_arguments)]
-fn flush<S, K, E, P>(
+pub(super) fn flush<S, K, E, P>(
     ctx: &mut Ctx<'_, S, K, P>,
     st: &State,
     ws: &[u8],

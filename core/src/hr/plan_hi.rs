@@ -10,7 +10,7 @@ use super::error::HrError;
 use super::layout::ALIGN;
 use super::room::{Rooms, scratch_bytes as room_scratch_bytes};
 use super::settings::{Inline, Settings};
-use super::siblings::MAX_JOBS;
+use super::siblings::ROOMS_KEPT;
 use crate::image::{SceneSource, SceneView};
 
 /// The workspace a solve by hierarchical instantiation needs (bytes).
@@ -52,13 +52,12 @@ fn rooms_bytes<S: SceneSource>(view: &SceneView<S>) -> usize {
 }
 
 /// Plans a solve of `view` by hierarchical instantiation with `settings`, the originals
-/// `inline` names expanded in place, on `threads` threads. `scratch` holds
-/// [`plan_hi_scratch_bytes`].
+/// `inline` names expanded in place. The plan is the same for any number of threads, as
+/// the results are. `scratch` holds [`plan_hi_scratch_bytes`].
 pub fn plan_hi<S: SceneSource>(
     view: &SceneView<S>,
     settings: &Settings,
     inline: Inline<'_>,
-    threads: usize,
     scratch: &mut [u8],
 ) -> Result<HiPlan, HrError> {
     settings.check()?;
@@ -79,13 +78,8 @@ pub fn plan_hi<S: SceneSource>(
     let originals = view.info().originals as usize;
     let origin = ((originals * core::mem::size_of::<Census>()).next_multiple_of(ALIGN)
         + n.next_multiple_of(ALIGN)) as u64;
-    // As `open::level` leaves room: twice as many as run side by side (each job's part
-    // holds the record of what it hands out).
-    let together = match threads.clamp(1, MAX_JOBS) as u64 {
-        1 => 1,
-        t => 2 * t,
-    };
-    let children_bytes = children.suggested.saturating_mul(together);
+    // As `open::level` leaves room (see `siblings::ROOMS_KEPT`).
+    let children_bytes = children.suggested.saturating_mul(ROOMS_KEPT);
     // Its least with the margin of every level's least room, and what it is estimated to
     // grow by: `open::level` leaves its children the rest (see `room::capped_total`).
     let top_level_bytes = super::room::least_with_margin(top.min_bytes)

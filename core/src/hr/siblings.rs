@@ -9,7 +9,7 @@ use super::beams::beams;
 use super::error::{HrError, SolveError};
 use super::exec::{Executor, Progress};
 use super::level::{LevelRoot, beam_floats};
-use super::open::{Ctx, level};
+use super::open::{Ctx, flush, level};
 use super::settings::Inline;
 use super::state::State;
 use super::tally::Tally;
@@ -20,6 +20,17 @@ use crate::visibility::Unoccluded;
 
 /// Most sibling instances opened together.
 pub(super) const MAX_JOBS: usize = 16;
+
+/// Sibling instances opened together per job the executor runs at once.
+pub(super) const BATCH_PER_WORKER: usize = 4;
+
+/// Children's rooms a level leaves free when it refines under a budget (see
+/// `room::capped_total`): two side by side, each with as much again for the record of what
+/// it hands out. A constant, not the thread count: a level capped by the threads refined
+/// differently on one thread and on two, and as a job (one at a time inside) and alone, so
+/// that results under a budget changed with the threads. More workers than the room allows
+/// get smaller parts, and an instance whose part proves too small opens again alone.
+pub(super) const ROOMS_KEPT: u64 = 4;
 
 /// A closed instance to open: its leaf, its contents (node and placement) and their first
 /// polygon's global id.
@@ -46,23 +57,47 @@ enum Outcome {
     Failed(HrError),
 }
 
-/// A sibling instance opened in its own part of the workspace.
+/// A sibling instance opened as a job: its results are recorded in its own slot of the
+/// workspace, its levels solved in the part of the worker that takes it.
 struct Job<'w, 'b> {
-    part: &'w mut [u8],
-    /// Where the part starts in the caller's workspace (bytes).
-    origin: usize,
+    /// Where its results are recorded.
+    slot: &'w mut [u8],
     item: Item<'b>,
     tally: Tally,
     recorded: usize,
     outcome: Outcome,
 }
 
-/// Opens the closed instances `items` (siblings in the level `st`, in global-id order, in
-/// `free`, which starts `origin` bytes into the caller's workspace). More than one: each in
-/// its own part of `free`, as jobs of the executor (concurrently if it runs them so), each
-/// solved as alone with its results recorded, then handed on in order; one that did not
-/// fit its part is opened again in the whole of `free`, as are the ones after it. The
-/// results, and the tallies added in order, are the same for any number of jobs.
+/// A worker's part of the workspace, where the jobs it takes solve their levels one after
+/// another.
+struct Part<'w> {
+    bytes: &'w mut [u8],
+}
+
+/// What a batch hands out, in global-id order.
+#[derive(Clone, Copy)]
+pub(super) enum Entry<'b> {
+    /// The level's `count` polygons before `polygon`, the last with global id `next_id - 1`.
+    Own {
+        polygon: u32,
+        count: u32,
+        next_id: u64,
+    },
+    /// A closed instance's contents.
+    Child(Item<'b>),
+}
+
+/// Closed instances waiting to be opened and the level's polygons between them.
+pub(super) type Batch<'b> = heapless::Vec<Entry<'b>, { 2 * MAX_JOBS + 1 }>;
+
+/// Opens the closed instances of `entries` (siblings in the level `st`, in `free`, which
+/// starts `origin` bytes into the caller's workspace) and hands out the level's polygons
+/// between them, in order. More than one instance: as jobs of the executor, taken by as
+/// many workers as it runs at once, each solving its jobs' levels in its own part of
+/// `free`; each job's results are recorded in a slot of their own and handed on in order. A job whose slot or part proved too small is opened again in the
+/// whole of `free`, as are the ones after it. Which worker takes a job changes neither its
+/// results nor whether it fits: the results, and the tallies added in order, are the same
+/// for any number of workers.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn open_batch<S, K, E, P>(
     ctx: &mut Ctx<'_, S, K, P>,
@@ -72,7 +107,8 @@ pub(super) fn open_batch<S, K, E, P>(
     free: &mut [u8],
     origin: usize,
     exec: &mut E,
-    items: &[Item<'_>],
+    scratch: &mut [f32],
+    entries: &[Entry<'_>],
     depth: usize,
 ) -> Result<(), SolveError<K::Error>>
 where
@@ -81,46 +117,73 @@ where
     E: Executor,
     P: Progress,
 {
-    let mut again = 0;
-    if items.len() > 1 {
-        again = items.len();
-        let part = (free.len() / items.len()) & !(super::layout::ALIGN - 1);
+    let mut items: heapless::Vec<Item<'_>, MAX_JOBS> = heapless::Vec::new();
+    for e in entries {
+        if let Entry::Child(item) = e {
+            items.push(*item).map_err(|_| HrError::SceneTooLarge)?;
+        }
+    }
+    let mut outcomes: heapless::Vec<(Outcome, Tally, usize), MAX_JOBS> = heapless::Vec::new();
+    let workers = exec.parallelism().clamp(1, MAX_JOBS).min(items.len());
+    // Where each job's record starts in `free` and its length, when jobs ran.
+    let mut slots: heapless::Vec<(usize, usize), MAX_JOBS> = heapless::Vec::new();
+    if items.len() > 1 && workers > 1 {
+        // Half of `free` records what the jobs hand out (each polygon and its leaf patches,
+        // see `recorder`; pages untouched cost nothing), in equal slots, as many as a batch
+        // holds: the same slots batch after batch, so that only the records' own pages are
+        // ever touched; the other half is the workers' parts.
+        let align = super::layout::ALIGN;
+        let records = (free.len() / 2) & !(align - 1);
+        let (rec, rest) = free.split_at_mut(records);
+        let part = (rest.len() / workers) & !(align - 1);
+        let batch = (exec.parallelism().clamp(1, MAX_JOBS) * BATCH_PER_WORKER)
+            .clamp(items.len(), MAX_JOBS.max(items.len()));
+        let share = (records / batch) & !(align - 1);
         let mut jobs: heapless::Vec<Job<'_, '_>, MAX_JOBS> = heapless::Vec::new();
-        let mut rest = &mut *free;
-        for (k, item) in items.iter().enumerate() {
-            let at = part.min(rest.len());
-            let (p, r) = core::mem::take(&mut rest).split_at_mut(at);
-            rest = r;
+        let mut left = rec;
+        let mut at = 0;
+        for item in &items {
+            let len = share.min(left.len());
+            let (slot, r) = core::mem::take(&mut left).split_at_mut(len);
+            left = r;
+            let _ = slots.push((at, len));
+            at += len;
             let _ = jobs.push(Job {
-                part: p,
-                origin: origin + k * part,
+                slot,
                 item: *item,
                 tally: Tally::new(),
                 recorded: 0,
                 outcome: Outcome::Again,
             });
         }
+        let mut parts: heapless::Vec<Part<'_>, MAX_JOBS> = heapless::Vec::new();
+        let mut left = rest;
+        for _ in 0..workers {
+            let len = part.min(left.len());
+            let (p, r) = core::mem::take(&mut left).split_at_mut(len);
+            left = r;
+            let _ = parts.push(Part { bytes: p });
+        }
         let shared = ctx.shared;
-        let work = |_: usize, job: &mut Job<'_, '_>| {
-            // Half the part records what the contents hand out (each polygon and its leaf
-            // patches, see `recorder`; pages untouched cost nothing), half solves them.
-            let record = (job.part.len() / 2) & !(super::layout::ALIGN - 1);
-            let (rec, ws) = job.part.split_at_mut(record);
-            let Ok(words) = bytemuck::try_cast_slice_mut::<u8, u32>(rec) else {
+        let parts_at = origin + records;
+        let work = |k: usize, job: &mut Job<'_, '_>, part: &mut Part<'_>| {
+            let Ok(words) = bytemuck::try_cast_slice_mut::<u8, u32>(&mut job.slot[..]) else {
                 return;
             };
             let mut recorder = super::recorder::Recorder::new(words);
             let mut progress = super::exec::NoProgress;
             let mut sub = Ctx::new(shared, &mut progress, &mut recorder);
-            let origin = job.origin + record;
+            // Reported as if job k ran in part k mod workers (the stats do not depend on
+            // which worker took it; every part is the same size).
+            let at = parts_at + (k % workers) * part.bytes.len();
             let r = open_child(
                 &mut sub,
                 st,
                 mine,
                 vis,
                 &job.item,
-                ws,
-                origin,
+                part.bytes,
+                at,
                 &mut super::exec::Sequential,
                 depth,
             );
@@ -134,29 +197,62 @@ where
                 Err(SolveError::Hr(e)) => Outcome::Failed(e),
             };
         };
-        exec.run_jobs(&mut jobs, &work);
-        for (k, job) in jobs.iter().enumerate() {
-            match job.outcome {
-                Outcome::Failed(e) => return Err(e.into()),
-                Outcome::Again => {
-                    again = k;
-                    ctx.tally.stats.opened_again += (items.len() - k) as u64;
-                    break;
-                }
-                Outcome::Done => {
-                    let words: &[u32] = bytemuck::cast_slice(&job.part[..4 * job.recorded]);
-                    super::recorder::replay(words, ctx.sink).map_err(SolveError::Sink)?;
-                    ctx.tally.add(&job.tally);
-                    ctx.tally.stats.levels_together += job.tally.levels;
-                }
-            }
+        exec.run_jobs(&mut jobs, &mut parts, &work);
+        for job in &jobs {
+            let _ = outcomes.push((job.outcome, job.tally, job.recorded));
         }
     }
-    for item in &items[again..] {
-        let mut sub = Ctx::new(ctx.shared, &mut *ctx.progress, &mut *ctx.sink);
-        open_child(&mut sub, st, mine, vis, item, free, origin, exec, depth)?;
-        let t = sub.tally;
-        ctx.tally.add(&t);
+    // In order: the level's polygons, the jobs' records; from the first job that did not
+    // fit on (or without jobs), each instance opened alone in the whole of `free`.
+    let mut k = 0;
+    let mut alone = outcomes.is_empty();
+    for e in entries {
+        match e {
+            Entry::Own {
+                polygon,
+                count,
+                next_id,
+            } => {
+                let mut pending = *count;
+                flush(
+                    ctx,
+                    st,
+                    mine,
+                    vis,
+                    exec,
+                    scratch,
+                    *polygon,
+                    &mut pending,
+                    *next_id,
+                )?;
+            }
+            Entry::Child(item) => {
+                if !alone {
+                    let (outcome, tally, recorded) = outcomes[k];
+                    match outcome {
+                        Outcome::Failed(e) => return Err(e.into()),
+                        Outcome::Done => {
+                            let (at, _) = slots[k];
+                            let words: &[u32] = bytemuck::cast_slice(&free[at..at + 4 * recorded]);
+                            super::recorder::replay(words, ctx.sink).map_err(SolveError::Sink)?;
+                            ctx.tally.add(&tally);
+                            ctx.tally.stats.levels_together += tally.levels;
+                            k += 1;
+                            continue;
+                        }
+                        Outcome::Again => {
+                            alone = true;
+                            ctx.tally.stats.opened_again += (items.len() - k) as u64;
+                        }
+                    }
+                }
+                let mut sub = Ctx::new(ctx.shared, &mut *ctx.progress, &mut *ctx.sink);
+                open_child(&mut sub, st, mine, vis, item, free, origin, exec, depth)?;
+                let t = sub.tally;
+                ctx.tally.add(&t);
+                k += 1;
+            }
+        }
     }
     Ok(())
 }

@@ -5,7 +5,7 @@ use hirad_core::hr::Executor;
 use rayon::prelude::*;
 use std::cell::RefCell;
 use std::ops::Range;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Runs a batch of chunks on a pool of `threads` threads; with one thread, on the caller's
 /// own (handing each batch to a pool thread and waiting for it cost more than the work in
@@ -119,16 +119,35 @@ impl Executor for RayonExecutor {
         self.threads()
     }
 
-    fn run_jobs<T: Send>(&mut self, jobs: &mut [T], work: &(dyn Fn(usize, &mut T) + Sync)) {
+    fn run_jobs<T: Send, P: Send>(
+        &mut self,
+        jobs: &mut [T],
+        parts: &mut [P],
+        work: &(dyn Fn(usize, &mut T, &mut P) + Sync),
+    ) {
         match &self.pool {
-            Some(pool) if jobs.len() > 1 => pool.install(|| {
-                jobs.par_iter_mut()
-                    .enumerate()
-                    .for_each(|(k, job)| work(k, job));
-            }),
+            Some(pool) if jobs.len() > 1 && parts.len() > 1 => {
+                // A job takes the part of the pool thread it runs on: one job at a time per
+                // thread (a job runs no pool work itself), so a part is never held twice
+                // and its lock never waits. Jobs are handed out one by one, so that a long
+                // one does not hold back those after it.
+                let locks: Vec<Mutex<&mut P>> = parts.iter_mut().map(Mutex::new).collect();
+                pool.install(|| {
+                    jobs.par_iter_mut()
+                        .enumerate()
+                        .with_max_len(1)
+                        .for_each(|(k, job)| {
+                            let t = rayon::current_thread_index().unwrap_or(0) % locks.len();
+                            let mut part = locks[t].lock().unwrap_or_else(|e| e.into_inner());
+                            work(k, job, &mut part);
+                        });
+                });
+            }
             _ => {
-                for (k, job) in jobs.iter_mut().enumerate() {
-                    work(k, job);
+                if let Some(part) = parts.first_mut() {
+                    for (k, job) in jobs.iter_mut().enumerate() {
+                        work(k, job, part);
+                    }
                 }
             }
         }

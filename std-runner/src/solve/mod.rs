@@ -277,8 +277,7 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     let hi_plan = match hi_inline {
         Some(inline) => {
             let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
-            let mut p =
-                hr::plan_hi(view, &settings, inline, threads, &mut scratch).map_err(classify)?;
+            let mut p = hr::plan_hi(view, &settings, inline, &mut scratch).map_err(classify)?;
             // A budget below the plan with the approximate instances' own polygons: they
             // block as their originals do, if that lets every level open.
             if let Some(m) = memory
@@ -289,8 +288,7 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
                     own_polygons: 0,
                     ..settings
                 };
-                let q =
-                    hr::plan_hi(view, &without, inline, threads, &mut scratch).map_err(classify)?;
+                let q = hr::plan_hi(view, &without, inline, &mut scratch).map_err(classify)?;
                 if q.min_bytes < p.min_bytes {
                     if progress.enabled() {
                         eprintln!(
