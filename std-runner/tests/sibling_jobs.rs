@@ -70,6 +70,45 @@ fn scene(groups: u32, big: u32, leaves: u32) -> String {
     t
 }
 
+/// `hirad solve IMAGE --method hi --instancing all --threads THREADS [--memory M]`, which
+/// must succeed: its results table's bytes and its stats.
+fn solve_hi(
+    image: &std::path::Path,
+    threads: &str,
+    memory: Option<&str>,
+    name: &str,
+) -> (Vec<u8>, serde_json::Value) {
+    let dir = image.parent().unwrap();
+    let csv = dir.join(format!("{name}_{threads}.csv"));
+    let json = dir.join(format!("{name}_{threads}.json"));
+    let mut args = vec![
+        "solve",
+        s(image),
+        "--method",
+        "hi",
+        "--instancing",
+        "all",
+        "--threads",
+        threads,
+        "--results",
+        s(&csv),
+        "--stats",
+        s(&json),
+        "-q",
+    ];
+    if let Some(m) = memory {
+        args.extend(["--memory", m]);
+    }
+    let out = hirad(&args);
+    assert!(
+        out.status.success(),
+        "{name}, {threads} threads: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stats = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (std::fs::read(&csv).unwrap(), stats)
+}
+
 #[test]
 fn uneven_siblings_with_polygons_between_them_open_as_jobs() {
     let dir = tempfile::tempdir().unwrap();
@@ -84,29 +123,7 @@ fn uneven_siblings_with_polygons_between_them_open_as_jobs() {
         let closed = groups as u64 * (big as u64 + 1);
         let mut first: Option<Vec<u8>> = None;
         for threads in ["1", "2", "3"] {
-            let csv = dir.path().join(format!("jobs_{groups}_{threads}.csv"));
-            let json = dir.path().join(format!("jobs_{groups}_{threads}.json"));
-            let out = hirad(&[
-                "solve",
-                s(&image),
-                "--method",
-                "hi",
-                "--instancing",
-                "all",
-                "--threads",
-                threads,
-                "--results",
-                s(&csv),
-                "--stats",
-                s(&json),
-                "-q",
-            ]);
-            assert!(
-                out.status.success(),
-                "{case}, {threads} threads: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            let bytes = std::fs::read(&csv).unwrap();
+            let (bytes, v) = solve_hi(&image, threads, None, &format!("jobs_{groups}"));
             let text = String::from_utf8(bytes.clone()).unwrap();
             let ids: Vec<usize> = text
                 .lines()
@@ -121,8 +138,6 @@ fn uneven_siblings_with_polygons_between_them_open_as_jobs() {
                     "{case}: --threads {threads} changed the results"
                 ),
             }
-            let v: serde_json::Value =
-                serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
             let levels = &v["levels"];
             assert_eq!(levels["solved"], closed + 1, "{case}: {levels}");
             assert_eq!(levels["opened_again"], 0, "{case}: {levels}");
@@ -161,38 +176,11 @@ fn a_budget_refines_alike_on_any_number_of_threads() {
             let case = format!("{groups} groups, --memory {memory} ({scale} x the least)");
             let mut first: Option<Vec<u8>> = None;
             for threads in ["1", "2"] {
-                let csv = dir.path().join(format!("b_{groups}_{scale}_{threads}.csv"));
-                let json = dir
-                    .path()
-                    .join(format!("b_{groups}_{scale}_{threads}.json"));
-                let out = hirad(&[
-                    "solve",
-                    s(&image),
-                    "--method",
-                    "hi",
-                    "--instancing",
-                    "all",
-                    "--memory",
-                    &memory,
-                    "--threads",
-                    threads,
-                    "--results",
-                    s(&csv),
-                    "--stats",
-                    s(&json),
-                    "-q",
-                ]);
-                assert!(
-                    out.status.success(),
-                    "{case}, {threads} threads: {}",
-                    String::from_utf8_lossy(&out.stderr)
-                );
-                let v: serde_json::Value =
-                    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+                let name = format!("b_{groups}_{scale}");
+                let (bytes, v) = solve_hi(&image, threads, Some(&memory), &name);
                 if v["budget_limited"] == true && threads == "1" {
                     limited += 1;
                 }
-                let bytes = std::fs::read(&csv).unwrap();
                 match &first {
                     None => first = Some(bytes),
                     Some(f) => assert!(
