@@ -95,7 +95,12 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
         asked
     };
     if passes > 1 {
-        st.take_corrections(ws);
+        // Without room for them the passes relight otherwise: the budget limited the
+        // result, which a level opened as a job must say (it is then opened again alone, as
+        // on one thread), or its results would depend on the size of its part.
+        if !st.take_corrections(ws) {
+            st.stats.budget_limited = true;
+        }
         st.stats.peak_bytes = st.stats.peak_bytes.max(st.bytes_in_use() as u64);
     }
     let mut before = leaving_power(st, ws);
