@@ -252,8 +252,10 @@ fn add_instance<V: Visibility + ?Sized>(
         } else {
             0.0
         };
+        let mut i_d = [0.0f32; MAX_BANDS];
+        all.intensity_all(&placed, d, &mut i_d[..nb]);
         for b in 0..nb {
-            let w = all.intensity(&placed, d, b) as f64;
+            let w = i_d[b] as f64;
             sent[b] += w;
             escaped[b] += w * t;
         }

@@ -7,9 +7,10 @@
 //! may cross; each candidate is tested against its placed (oriented) box.
 
 use super::error::HrError;
+use super::exec::{Executor, Fallback, run_chunks_scaled};
 use super::state::State;
 use crate::bvh::{Bvh, BvhNode};
-use crate::limits::NONE;
+use crate::limits::{MAX_BANDS, NONE};
 use glam::Vec3;
 
 /// A `skip` entry that names closed instance `i` is `SKIP_INSTANCE | i`: the segment starts
@@ -416,41 +417,83 @@ fn keeps_polygons(st: &State, ws: &[u8], i: u32) -> bool {
 /// one polygon a ray meets. Gather rays read it (see
 /// [`light_along`]) once the level is solved: the tables' sum over all their cells for
 /// every ray was four fifths of a canopy's gather.
-pub(crate) fn note_radiance(st: &State, ws: &mut [u8]) {
-    for i in 0..st.instances {
-        let part = usize::from(shows_polygons(st, ws, i));
-        let mut noted = [[0.0f32; crate::limits::MAX_BANDS]; RADIANCE_CELLS];
-        let mut largest = 0.0f32;
-        for (cell, out) in noted.iter_mut().enumerate() {
-            let o = RADIANCE_GRID.direction(cell as u32);
+pub(crate) fn note_radiance<E: Executor>(st: &State, ws: &mut [u8], ex: &mut Fallback<'_, E>) {
+    let nb = st.bands;
+    let per = radiance_chunk_floats(nb);
+    let mut ctx = NoteCtx { st, ws };
+    // An instance a chunk, its cells on the executor's threads (the tables' intensity in
+    // each cell's direction is the costly part); each writes only its own instance's.
+    run_chunks_scaled(
+        ex,
+        &mut ctx,
+        st.instances as usize,
+        1,
+        per,
+        |c: &NoteCtx<'_>, i, buf| {
+            let (st, ws) = (c.st, &*c.ws);
+            let i = i as u32;
+            let part = usize::from(shows_polygons(st, ws, i));
+            let (noted, largest) = buf.split_at_mut(RADIANCE_CELLS * nb);
+            noted.fill(0.0);
+            largest[0] = 0.0;
             let placed = st.placed(ws, i);
-            let shadow = placed.shadow(o);
-            if let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i))
-                && shadow > 0.0
-            {
-                for (band, x) in out.iter_mut().enumerate().take(st.bands) {
-                    let (all, once) = r.intensity_parts(&placed, o, band);
-                    let v = if part == 0 { all } else { all - once };
+            let Ok(r) = crate::tables::closed::Received::over(&placed, st.received(ws, i)) else {
+                return;
+            };
+            for (cell, out) in noted.chunks_exact_mut(nb).enumerate() {
+                let o = RADIANCE_GRID.direction(cell as u32);
+                let shadow = placed.shadow(o);
+                // (Not `<= 0.0`: a shadow that is not a number notes nothing either.)
+                if !matches!(shadow.partial_cmp(&0.0), Some(core::cmp::Ordering::Greater)) {
+                    continue;
+                }
+                let (mut all, mut once) = ([0.0f32; MAX_BANDS], [0.0f32; MAX_BANDS]);
+                r.intensity_parts_all(&placed, o, &mut all[..nb], &mut once[..nb]);
+                for (band, x) in out.iter_mut().enumerate() {
+                    let v = if part == 0 {
+                        all[band]
+                    } else {
+                        all[band] - once[band]
+                    };
                     *x = core::f32::consts::PI * v.max(0.0) / shadow;
                     if x.is_finite() {
-                        largest = largest.max(*x);
+                        largest[0] = largest[0].max(*x);
                     }
                 }
             }
-        }
-        super::pool::write(ws, scale_at(st, i), &largest);
-        for (cell, x) in noted.iter().enumerate() {
-            for (band, v) in x.iter().enumerate().take(st.bands) {
-                let h = if largest > 0.0 {
-                    (v / largest).min(1.0)
-                } else {
-                    0.0
-                };
-                let at = radiance_at(st, i, cell as u32, band);
-                ws[at..at + 2].copy_from_slice(&half::f16::from_f32(h).to_bits().to_le_bytes());
+        },
+        |c: &mut NoteCtx<'_>, i, buf| {
+            let (st, ws) = (c.st, &mut *c.ws);
+            let i = i as u32;
+            let (noted, largest) = buf.split_at(RADIANCE_CELLS * nb);
+            let largest = largest[0];
+            super::pool::write(ws, scale_at(st, i), &largest);
+            for (cell, x) in noted.chunks_exact(nb).enumerate() {
+                for (band, v) in x.iter().enumerate() {
+                    let h = if largest > 0.0 {
+                        (v / largest).min(1.0)
+                    } else {
+                        0.0
+                    };
+                    let at = radiance_at(st, i, cell as u32, band);
+                    ws[at..at + 2].copy_from_slice(&half::f16::from_f32(h).to_bits().to_le_bytes());
+                }
             }
-        }
-    }
+        },
+        &mut |_, _| {},
+    );
+}
+
+/// Floats [`note_radiance`] hands back per closed instance: its radiosity per cell and
+/// band, and the largest (the executor's scratch holds at least this many).
+pub(crate) fn radiance_chunk_floats(bands: usize) -> usize {
+    RADIANCE_CELLS * bands + 1
+}
+
+/// The state shared by [`note_radiance`]'s chunks.
+struct NoteCtx<'a> {
+    st: &'a State,
+    ws: &'a mut [u8],
 }
 
 /// What a segment meets of a closed instance (see [`meets`]).

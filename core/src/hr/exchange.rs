@@ -19,9 +19,9 @@
 //! total), then the entries (receiver << 6 | cell, share), then per instance, cell and band
 //! the power it received from the others at the last gather (W).
 
-use super::exec::{Executor, Fallback, Progress, run_chunks};
+use super::exec::{Executor, Fallback, Progress, run_chunks, run_chunks_scaled};
 use super::ids::{Elem, Kind};
-use super::layout::up;
+use super::layout::{CHUNK, up};
 use super::state::{Handed, State};
 use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::{MAX_BANDS, NONE};
@@ -65,8 +65,9 @@ const _: () = assert!(
 /// entries, per instance and cell its escaping rays (their mean direction and how many,
 /// 4 floats), received power, per instance and cell the power its escaping rays stand for
 /// at the last gather (see [`escaping`]), per instance its mean radiosity before the last
-/// gather, end.
-fn parts(n: u32, bands: usize) -> [usize; 7] {
+/// gather, per instance and cell its links' light at the last gather (see
+/// [`links_now_at`]), end.
+fn parts(n: u32, bands: usize) -> [usize; 8] {
     let n = n as usize;
     let heads = 0;
     let entries = heads + up(4 * (n + 1));
@@ -74,13 +75,14 @@ fn parts(n: u32, bands: usize) -> [usize; 7] {
     let power = cells + up(16 * n * CELLS);
     let sent = power + up(4 * n * CELLS * bands);
     let before = sent + up(4 * n * CELLS * bands);
-    let end = before + up(4 * n);
-    [heads, entries, cells, power, sent, before, end]
+    let links = before + up(4 * n);
+    let end = links + up(4 * n * CELLS * bands);
+    [heads, entries, cells, power, sent, before, links, end]
 }
 
 /// Bytes of the region for `n` closed instances (0 without any).
 pub(crate) fn bytes_needed(n: u32, bands: usize) -> usize {
-    if n == 0 { 0 } else { parts(n, bands)[6] }
+    if n == 0 { 0 } else { parts(n, bands)[7] }
 }
 
 /// Bytes of the region written: everything but the entries never reached (0 without
@@ -92,7 +94,7 @@ pub(crate) fn bytes_written(st: &State, ws: &[u8]) -> usize {
     }
     let p = parts(n, st.bands);
     let written: u32 = super::pool::read(ws, st.lay.exchange + p[0] + 4 * n as usize);
-    p[6] - (p[2] - p[1]) + ENTRY_BYTES * written as usize
+    p[7] - (p[2] - p[1]) + ENTRY_BYTES * written as usize
 }
 
 /// True when closed instance `i` sends its light to the others through the exchange (it
@@ -308,7 +310,7 @@ fn power_at(st: &State, i: u32, cell: usize) -> usize {
 /// module documentation), from the light they hold now: notes what each one's escaping rays
 /// stand for (for [`land`]) and fills the received power of every instance by cell, which
 /// [`receive`] then adds to its light.
-pub(crate) fn gather(st: &State, ws: &mut [u8]) {
+pub(crate) fn gather<E: Executor>(st: &State, ws: &mut [u8], ex: &mut Fallback<'_, E>) {
     let n = st.instances;
     if n == 0 {
         return;
@@ -322,39 +324,87 @@ pub(crate) fn gather(st: &State, ws: &mut [u8]) {
     for (c, o) in opposite.iter_mut().enumerate() {
         *o = grid.cell_of(-grid.direction(c as u32));
     }
-    for j in 0..n {
-        let (first, last) = entries_of(ws, &p, base, j);
-        if first >= last {
-            continue;
-        }
-        let Some(sent) = escaping(st, ws, j, &p) else {
-            continue;
-        };
-        for (cell, v) in sent.iter().enumerate() {
-            let at = sent_at(&p, base, j, cell, nb);
-            super::pool::floats_mut(ws, at, nb).copy_from_slice(&v[..nb]);
-        }
-        for e in first..last {
-            let Some((to, cell, _, power)) = entry(st, ws, &p, j, e, &sent) else {
-                continue;
-            };
-            let acc: &mut [f32] =
-                super::pool::floats_mut(ws, power_at(st, to, opposite[cell] as usize), nb);
-            for (a, x) in acc.iter_mut().zip(&power) {
-                *a += x;
+    // Each emitter's escaping power (the tables' intensity, the costly part) in chunks on
+    // the executor's threads; then, emitter after emitter, what its entries carry, so that
+    // every receiver's sums are added in the same order on any number of threads.
+    let per = CELLS * nb + 1;
+    let mut ctx = GatherCtx { st, ws };
+    run_chunks_scaled(
+        ex,
+        &mut ctx,
+        (n as usize).div_ceil(ESCAPING_CHUNK),
+        CHUNK / ESCAPING_CHUNK,
+        ESCAPING_CHUNK * per,
+        |c: &GatherCtx<'_>, chunk, buf| {
+            buf.fill(0.0);
+            for (slot, j) in
+                (chunk * ESCAPING_CHUNK..((chunk + 1) * ESCAPING_CHUNK).min(n as usize)).enumerate()
+            {
+                let (first, last) = entries_of(c.ws, &p, base, j as u32);
+                if first >= last {
+                    continue;
+                }
+                let Some(sent) = escaping(c.st, c.ws, j as u32, &p) else {
+                    continue;
+                };
+                let out = &mut buf[slot * per..(slot + 1) * per];
+                out[0] = 1.0;
+                for (cell, v) in sent.iter().enumerate() {
+                    out[1 + cell * nb..1 + (cell + 1) * nb].copy_from_slice(&v[..nb]);
+                }
             }
-        }
-    }
+        },
+        |c: &mut GatherCtx<'_>, chunk, buf| {
+            let (st, ws) = (c.st, &mut *c.ws);
+            for (slot, j) in
+                (chunk * ESCAPING_CHUNK..((chunk + 1) * ESCAPING_CHUNK).min(n as usize)).enumerate()
+            {
+                let out = &buf[slot * per..(slot + 1) * per];
+                if out[0] == 0.0 {
+                    continue;
+                }
+                let j = j as u32;
+                let mut sent = [[0.0f32; MAX_BANDS]; CELLS];
+                for (cell, v) in sent.iter_mut().enumerate() {
+                    v[..nb].copy_from_slice(&out[1 + cell * nb..1 + (cell + 1) * nb]);
+                    let at = sent_at(&p, base, j, cell, nb);
+                    super::pool::floats_mut(ws, at, nb).copy_from_slice(&v[..nb]);
+                }
+                let (first, last) = entries_of(ws, &p, base, j);
+                for e in first..last {
+                    let Some((to, cell, _, power)) = entry(st, ws, &p, j, e, &sent) else {
+                        continue;
+                    };
+                    let acc: &mut [f32] =
+                        super::pool::floats_mut(ws, power_at(st, to, opposite[cell] as usize), nb);
+                    for (a, x) in acc.iter_mut().zip(&power) {
+                        *a += x;
+                    }
+                }
+            }
+        },
+        &mut |_, _| {},
+    );
+}
+
+/// Emitters per chunk of [`gather`]'s escaping power: two fit the executor's scratch
+/// (`CHUNK` times at least `4 + 2 bands` floats) at any number of bands.
+const ESCAPING_CHUNK: usize = 2;
+
+/// The state shared by [`gather`]'s chunks.
+struct GatherCtx<'a> {
+    st: &'a State,
+    ws: &'a mut [u8],
 }
 
 /// The range of emitter `j`'s entries (see [`parts`]).
-fn entries_of(ws: &[u8], p: &[usize; 7], base: usize, j: u32) -> (u32, u32) {
+fn entries_of(ws: &[u8], p: &[usize; 8], base: usize, j: u32) -> (u32, u32) {
     let at = base + p[0] + 4 * j as usize;
     (super::pool::read(ws, at), super::pool::read(ws, at + 4))
 }
 
 /// Where closed instance `j`'s escaping power in cell `cell` lies (see [`parts`]).
-fn sent_at(p: &[usize; 7], base: usize, j: u32, cell: usize, bands: usize) -> usize {
+fn sent_at(p: &[usize; 8], base: usize, j: u32, cell: usize, bands: usize) -> usize {
     base + p[4] + 4 * ((j as usize * CELLS + cell) * bands)
 }
 
@@ -364,7 +414,7 @@ fn sent_at(p: &[usize; 7], base: usize, j: u32, cell: usize, bands: usize) -> us
 fn entry(
     st: &State,
     ws: &[u8],
-    p: &[usize; 7],
+    p: &[usize; 8],
     j: u32,
     e: u32,
     sent: &[[f32; MAX_BANDS]; CELLS],
@@ -472,7 +522,7 @@ pub(crate) fn land(st: &State, ws: &mut [u8]) {
 }
 
 /// Closed instance `i`'s mean radiosity before the last gather (see
-/// `instance_light::gather_instances`), kept here and read back.
+/// `instance_gather::gather_instances`), kept here and read back.
 pub(crate) fn set_before(st: &State, ws: &mut [u8], i: u32, v: f32) {
     let p = parts(st.instances, st.bands);
     super::pool::write(ws, st.lay.exchange + p[5] + 4 * i as usize, &v);
@@ -485,7 +535,7 @@ pub(crate) fn before(st: &State, ws: &[u8], i: u32) -> f32 {
 }
 
 /// Closed instance `j`'s escaping rays in cell `cell` (see [`build`]).
-fn cell_rays(st: &State, ws: &[u8], j: u32, cell: usize, p: &[usize; 7]) -> f32 {
+fn cell_rays(st: &State, ws: &[u8], j: u32, cell: usize, p: &[usize; 8]) -> f32 {
     let v: [f32; 4] = super::pool::read(
         ws,
         st.lay.exchange + p[2] + 16 * (j as usize * CELLS + cell),
@@ -504,7 +554,7 @@ fn keeps_polygons(st: &State, ws: &[u8], i: u32) -> bool {
 /// etendue of as many rays drawn over its sides' area (each ray pi A / RAYS). The cell's
 /// solid angle times the intensity at its centre lost the light of cells across a flat
 /// emitter's horizon. `None` without polygons of its own.
-fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 7]) -> Option<[[f32; MAX_BANDS]; CELLS]> {
+fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 8]) -> Option<[[f32; MAX_BANDS]; CELLS]> {
     let nb = st.bands;
     let base = st.lay.exchange;
     let placed = st.placed(ws, j);
@@ -523,12 +573,9 @@ fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 7]) -> Option<[[f32; MAX_
         if shadow <= 0.0 {
             continue;
         }
-        for (band, x) in s.iter_mut().enumerate().take(nb) {
-            *x = r.intensity(&placed, d, band).max(0.0) / shadow
-                * core::f32::consts::PI
-                * sides_area
-                * v[3]
-                / RAYS as f32;
+        r.intensity_all(&placed, d, &mut s[..nb]);
+        for x in s.iter_mut().take(nb) {
+            *x = x.max(0.0) / shadow * core::f32::consts::PI * sides_area * v[3] / RAYS as f32;
         }
     }
     Some(sent)
@@ -539,6 +586,14 @@ fn escaping(st: &State, ws: &[u8], j: u32, p: &[usize; 7]) -> Option<[[f32; MAX_
 /// gather before (`Handed::Exchange`); where its tables keep its polygons apart, without
 /// their first scattering, which [`land`] adds from where the rays landed.
 pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32) {
+    let (now, first) = received_now(st, ws, i);
+    super::instance_light::hand(st, ws, i, Handed::Exchange, &now, first);
+}
+
+/// What [`receive`] hands closed instance `i`: the beams of the last [`gather`] per cell
+/// (W/m^2 per band over its cross-section that way) and whether they bring their first
+/// scattering (not where [`land`] adds it).
+pub(crate) fn received_now(st: &State, ws: &[u8], i: u32) -> ([[f32; MAX_BANDS]; CELLS], bool) {
     let nb = st.bands;
     let grid = grid();
     let landed = keeps_polygons(st, ws, i);
@@ -556,7 +611,14 @@ pub(crate) fn receive(st: &State, ws: &mut [u8], i: u32) {
             }
         }
     }
-    super::instance_light::hand(st, ws, i, Handed::Exchange, &now, !landed);
+    (now, !landed)
+}
+
+/// Where closed instance `i`'s links' light of the last gather lies: the byte offset of
+/// its `CELLS * bands` floats (see `instance_gather`).
+pub(crate) fn links_now_at(st: &State, i: u32) -> usize {
+    let p = parts(st.instances, st.bands);
+    st.lay.exchange + p[6] + 4 * (i as usize * CELLS * st.bands)
 }
 
 /// The beams (direction towards the emitters, flux density per band, W/m^2) closed

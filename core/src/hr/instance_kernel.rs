@@ -82,8 +82,9 @@ pub(crate) fn carried_radiosity(st: &State, ws: &[u8], i: u32, towards: Vec3, ou
         return;
     };
     let s = 4.0 * PI / leaf.area_ref;
-    for (band, o_b) in out.iter_mut().enumerate() {
-        *o_b = s * r.intensity(&placed, o, band);
+    r.intensity_all(&placed, o, out);
+    for o_b in out.iter_mut() {
+        *o_b *= s;
     }
 }
 

@@ -205,60 +205,6 @@ pub(crate) fn note_direct(st: &State, ws: &mut [u8]) {
     }
 }
 
-/// The light every closed instance receives through its links, added to its light as
-/// beams (each link's fluence spread over its cone, see [`cone_directions`] and
-/// `instance_kernel`), binned by direction on the exchange's grid: each cell's beam is
-/// applied by its change since the last gather (its light is kept from one gather to the
-/// next, see `State::handed`). Returns the largest change of an instance's mean
-/// radiosity (W/m^2, see `instance_kernel::mean_radiosity`) and the largest such radiosity,
-/// which the solution's convergence test takes with the patches'.
-pub(crate) fn gather_instances(st: &mut State, ws: &mut [u8]) -> (f32, f32) {
-    let nb = st.bands;
-    let kk = st.lay.strides.link_k;
-    let (mut change, mut largest) = (0.0f32, 0.0f32);
-    let grid = super::exchange::grid();
-    // What the instances send each other, from the light they hold now.
-    super::exchange::gather(st, ws);
-    for i in 0..st.instances {
-        let before = super::instance_kernel::mean_radiosity(st, ws, i);
-        super::exchange::set_before(st, ws, i, before);
-    }
-    for i in 0..st.instances {
-        let at = super::instance_kernel::centre_of(st, ws, i);
-        // The links' light now, binned by the direction towards its emitters.
-        let mut now = [[0.0f32; crate::limits::MAX_BANDS]; CELLS];
-        let mut cur = st.links_head(ws, Elem::new(Kind::Instance, i));
-        while cur != NONE {
-            let l = st.link(ws, cur);
-            let mut s = [0.0f32; crate::limits::MAX_BANDS];
-            link_flux(st, ws, cur, at, kk, &mut s[..nb]);
-            let mut dirs = [Vec3::ZERO; MAX_CONE];
-            let m = cone_directions(Vec3::from(l.dir), &mut dirs);
-            for &d in &dirs[..m] {
-                for (c, w) in grid.weights(d) {
-                    if w > 0.0 {
-                        for (o, v) in now[c as usize][..nb].iter_mut().zip(&s[..nb]) {
-                            *o += w * v / m as f32;
-                        }
-                    }
-                }
-            }
-            cur = l.next;
-        }
-        hand(st, ws, i, Handed::Links, &now, true);
-        super::exchange::receive(st, ws, i);
-    }
-    // Their first scattering where the exchange's rays landed, once every instance's light
-    // took its links' and beams' change.
-    super::exchange::land(st, ws);
-    for i in 0..st.instances {
-        let after = super::instance_kernel::mean_radiosity(st, ws, i);
-        change = change.max((after - super::exchange::before(st, ws, i)).abs());
-        largest = largest.max(after);
-    }
-    (change, largest)
-}
-
 /// Hands closed instance `i` the beams `now` (per cell of the exchange's grid, from the
 /// cell's direction, W/m^2 per band) as `part`: its light takes each cell's change since
 /// `part` last handed it (see `Received::change`; `first` as there), and `now` is noted.
@@ -273,19 +219,47 @@ pub(crate) fn hand(
     let nb = st.bands;
     let grid = super::exchange::grid();
     for (c, cell) in now.iter().enumerate() {
-        let mut d = [0.0f32; crate::limits::MAX_BANDS];
-        let had = &st.handed(ws, i, part)[c * nb..(c + 1) * nb];
-        for ((o, n), h) in d.iter_mut().zip(&cell[..nb]).zip(had) {
-            *o = n - h;
-        }
-        if d[..nb].iter().all(|&x| x == 0.0) {
+        let Some(d) = change(&st.handed(ws, i, part)[c * nb..(c + 1) * nb], &cell[..nb]) else {
             continue;
-        }
+        };
         let towards = grid.direction(c as u32);
         st.with_received(ws, i, |placed, r| {
             r.change(placed, towards, &d[..nb], first)
         });
         st.handed_mut(ws, i, part)[c * nb..(c + 1) * nb].copy_from_slice(&cell[..nb]);
+    }
+}
+
+/// [`hand`] over a copy of an instance's light (`r`) and of what `part` handed it
+/// (`had`, `CELLS * bands` floats, updated): the same changes in the same order.
+pub(crate) fn hand_into(
+    placed: &crate::tables::closed::Placed<'_>,
+    r: &mut crate::tables::closed::Received<&mut [f32]>,
+    had: &mut [f32],
+    now: &[[f32; crate::limits::MAX_BANDS]; CELLS],
+    first: bool,
+) {
+    let nb = had.len() / CELLS;
+    let grid = super::exchange::grid();
+    for (c, cell) in now.iter().enumerate() {
+        let Some(d) = change(&had[c * nb..(c + 1) * nb], &cell[..nb]) else {
+            continue;
+        };
+        r.change(placed, grid.direction(c as u32), &d[..nb], first);
+        had[c * nb..(c + 1) * nb].copy_from_slice(&cell[..nb]);
+    }
+}
+
+/// A cell's change from `had` to `now` (per band), `None` when nothing changed.
+fn change(had: &[f32], now: &[f32]) -> Option<[f32; crate::limits::MAX_BANDS]> {
+    let mut d = [0.0f32; crate::limits::MAX_BANDS];
+    for ((o, n), h) in d.iter_mut().zip(now).zip(had) {
+        *o = n - h;
+    }
+    if d[..now.len()].iter().all(|&x| x == 0.0) {
+        None
+    } else {
+        Some(d)
     }
 }
 

@@ -290,12 +290,13 @@ impl Layout {
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
-        let scratch_floats = CHUNK
+        let scratch_floats = (CHUNK
             * strides
                 .eval_out()
                 .max(strides.gather_out())
                 .max(strides.prepare_out())
-                .max(strides.bands);
+                .max(strides.bands))
+        .max(super::blockers::radiance_chunk_floats(strides.bands));
         let before_tables = at;
         let bvh_bytes = if internal_bvh {
             up(crate::bvh::bytes_needed(n_polygons))

@@ -36,6 +36,7 @@ mod final_gather;
 mod gather_rays;
 mod group;
 mod ids;
+mod instance_gather;
 mod instance_kernel;
 mod instance_light;
 mod layout;

@@ -285,9 +285,9 @@ where
         let scope = super::balance::Scope::Level;
         let balance = super::balance::measure(&st, ws, &vis, &mut seq, rays, scope, ctx.progress);
         ctx.tally.balance.add(&balance);
+        // What its closed instances show gather rays, here and from the levels opened in it.
+        super::blockers::note_radiance(&st, ws, &mut seq);
     }
-    // What its closed instances show gather rays, here and from the levels opened in it.
-    super::blockers::note_radiance(&st, ws);
     let total = &mut ctx.tally.stats;
     add_level(total, &st.stats, origin, depth == 0);
     total.level_depth = total.level_depth.max(depth as u32);

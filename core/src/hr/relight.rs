@@ -106,7 +106,7 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     let mut before = leaving_power(st, ws);
     for pass in 1..passes {
         // What the closed instances show gather rays, as the last solution left them.
-        super::blockers::note_radiance(st, ws);
+        super::blockers::note_radiance(st, ws, ex);
         let rays = relight(st, ws, vis, ex, progress, pass - 1);
         st.stats.rays += rays;
         st.stats.rays_by_phase.final_gather += rays;

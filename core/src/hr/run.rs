@@ -270,7 +270,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             balance::Scope::Scene,
             progress,
         );
-        super::blockers::note_radiance(st, ws);
+        super::blockers::note_radiance(st, ws, &mut self.seq);
         progress.report(output::phase(st, ws), 0, st.polygons as u64);
         let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
             .map_err(SolveError::Sink)?;

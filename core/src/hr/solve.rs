@@ -196,7 +196,7 @@ pub(crate) fn gather<E: Executor>(
     super::oriented::link_fluxes(st, ws, ex, unit);
     super::oriented::distribute(st, ws, ex, select);
     if st.instances > 0 && !unit {
-        st.instance_change = super::instance_light::gather_instances(st, ws);
+        st.instance_change = super::instance_gather::gather_instances(st, ws, ex);
     }
     let first = st.clusters as usize;
     let n = st.receiver_count() as usize - first;

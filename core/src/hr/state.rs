@@ -95,7 +95,7 @@ pub(crate) struct State {
     /// (see `Settings::own_polygons`; the census decided it for the level as a whole).
     pub own_blocking: bool,
     /// The last gather's largest change of a closed instance's mean radiosity and the
-    /// largest such radiosity (W/m^2; see `instance_light::gather_instances`).
+    /// largest such radiosity (W/m^2; see `instance_gather::gather_instances`).
     pub instance_change: (f32, f32),
     /// The scene's box (m).
     pub scene_min: Vec3,

@@ -19,6 +19,7 @@
 use super::directional::DirectionalTables;
 use super::phase::{LIT_SHARE, TableError, side_lit};
 use crate::geometry::{Aabb, Similarity};
+use crate::limits::MAX_BANDS;
 use glam::Vec3;
 
 /// Floats of the light a closed instance receives (see [`Received`]) for tables of `bands`
@@ -334,54 +335,112 @@ impl<S: AsRef<[f32]>> Received<S> {
 
     /// [`Self::intensity`] towards `observer` and its part scattered once (W/sr each).
     pub fn intensity_parts(&self, placed: &Placed<'_>, observer: Vec3, band: usize) -> (f32, f32) {
-        let o = placed.local(observer);
-        if o == Vec3::ZERO || band >= self.bands {
+        if band >= self.bands {
             return (0.0, 0.0);
+        }
+        let (mut all, mut once) = ([0.0f32; MAX_BANDS], [0.0f32; MAX_BANDS]);
+        self.intensity_bands(placed, observer, band..band + 1, &mut all, &mut once);
+        (all[band], once[band])
+    }
+
+    /// [`Self::intensity`] towards `observer` in every band at once (W/sr), into
+    /// `out[band]` for the bands `out` has room for (the rest of `out` is set to 0): the
+    /// directions' weights and the polygons' visible fractions are found once for all bands,
+    /// and each band's value is the one [`Self::intensity`] gives, to the bit.
+    pub fn intensity_all(&self, placed: &Placed<'_>, observer: Vec3, out: &mut [f32]) {
+        out.fill(0.0);
+        let (mut all, mut once) = ([0.0f32; MAX_BANDS], [0.0f32; MAX_BANDS]);
+        let n = out.len().min(self.bands);
+        self.intensity_bands(placed, observer, 0..n, &mut all, &mut once);
+        out[..n].copy_from_slice(&all[..n]);
+    }
+
+    /// [`Self::intensity_all`] and the part scattered once, per band (W/sr each).
+    pub fn intensity_parts_all(
+        &self,
+        placed: &Placed<'_>,
+        observer: Vec3,
+        all: &mut [f32],
+        once: &mut [f32],
+    ) {
+        all.fill(0.0);
+        once.fill(0.0);
+        let (mut a, mut o) = ([0.0f32; MAX_BANDS], [0.0f32; MAX_BANDS]);
+        let n = all.len().min(once.len()).min(self.bands);
+        self.intensity_bands(placed, observer, 0..n, &mut a, &mut o);
+        all[..n].copy_from_slice(&a[..n]);
+        once[..n].copy_from_slice(&o[..n]);
+    }
+
+    /// The intensity towards `observer` and its part scattered once in each band of
+    /// `bands` (W/sr), into `all[band]` and `once[band]`; each band summed in the same order
+    /// whichever bands are asked.
+    fn intensity_bands(
+        &self,
+        placed: &Placed<'_>,
+        observer: Vec3,
+        bands: core::ops::Range<usize>,
+        all: &mut [f32; MAX_BANDS],
+        once: &mut [f32; MAX_BANDS],
+    ) {
+        let o = placed.local(observer);
+        let bands = bands.start..bands.end.min(self.bands);
+        if o == Vec3::ZERO || bands.is_empty() {
+            return;
         }
         let t = &placed.tables;
         let phase = t.phase();
         let v = self.v();
         // The rest: what the incoming cells hold, through the response towards `o`.
         let out = phase.outgoing().weights(o);
-        let mut rest = 0.0f32;
+        let mut rest = [0.0f32; MAX_BANDS];
         for c in 0..phase.incoming().cells() {
             for side in 0..2 {
-                let w = v[self.cell_at(c as usize, side, band)];
-                if w == 0.0 {
-                    continue;
+                for band in bands.clone() {
+                    let w = v[self.cell_at(c as usize, side, band)];
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let r: f32 = out
+                        .iter()
+                        .map(|&(co, wo)| wo * phase.response_at(c, co, side, band))
+                        .sum();
+                    rest[band] += w * r;
                 }
-                let r: f32 = out
-                    .iter()
-                    .map(|&(co, wo)| wo * phase.response_at(c, co, side, band))
-                    .sum();
-                rest += w * r;
             }
         }
-        let mut sum = rest * t.shadow(o);
-        let mut once = 0.0f32;
+        let shadow = t.shadow(o);
         // The first scattering: each polygon's lit sides as the observer sees them.
         if let Some(single) = t.single() {
             let wo = single.grid().weights(o);
             for p in 0..self.polygons {
-                let (n, area, [rho_front, rho_back, tau]) = single.polygon(p, band);
+                let (n, area) = single.normal_area(p);
                 let co = n.dot(o);
                 if co == 0.0 {
                     continue;
                 }
-                let front = v[self.polygon_at(p, 0, band)];
-                let back = v[self.polygon_at(p, 1, band)];
-                let k = if co > 0.0 {
-                    rho_front * front + tau * back
-                } else {
-                    rho_back * back + tau * front
-                };
-                if k > 0.0 {
-                    once += area * co.abs() * single.fraction(&wo, p) * k / core::f32::consts::PI;
+                let mut fraction = None;
+                for band in bands.clone() {
+                    let [rho_front, rho_back, tau] = single.optics(p, band);
+                    let front = v[self.polygon_at(p, 0, band)];
+                    let back = v[self.polygon_at(p, 1, band)];
+                    let k = if co > 0.0 {
+                        rho_front * front + tau * back
+                    } else {
+                        rho_back * back + tau * front
+                    };
+                    if k > 0.0 {
+                        let f = *fraction.get_or_insert_with(|| single.fraction(&wo, p));
+                        once[band] += area * co.abs() * f * k / core::f32::consts::PI;
+                    }
                 }
             }
         }
-        sum += once;
-        (placed.area_scale * sum, placed.area_scale * once)
+        for band in bands {
+            let sum = rest[band] * shadow + once[band];
+            all[band] = placed.area_scale * sum;
+            once[band] *= placed.area_scale;
+        }
     }
 }
 

@@ -161,6 +161,18 @@ impl<'a> SingleScatter<'a> {
         v / VISIBLE_ONE as f32
     }
 
+    /// Polygon `p`'s unit normal and area (m^2) in the original's frame.
+    pub fn normal_area(&self, p: usize) -> (Vec3, f32) {
+        let s = &self.shape[p * shape_stride(self.bands)..];
+        (Vec3::new(s[0], s[1], s[2]), s[3])
+    }
+
+    /// Polygon `p`'s front reflectance, back reflectance and transmittance in band `band`.
+    pub fn optics(&self, p: usize, band: usize) -> [f32; 3] {
+        let s = &self.shape[p * shape_stride(self.bands) + GEOMETRY + 3 * band..];
+        [s[0], s[1], s[2]]
+    }
+
     /// Polygon `p`'s unit normal and area (m^2) in the original's frame, and its front
     /// reflectance, back reflectance and transmittance in band `band`.
     pub fn polygon(&self, p: usize, band: usize) -> (Vec3, f32, [f32; 3]) {
