@@ -70,12 +70,12 @@ fn scene(groups: u32, big: u32, leaves: u32) -> String {
     t
 }
 
-/// `hirad solve IMAGE --method hi --instancing all --threads THREADS [--memory M]`, which
-/// must succeed: its results table's bytes and its stats.
+/// `hirad solve IMAGE --method hi --instancing all --threads THREADS EXTRA...`, which must
+/// succeed: its results table's bytes and its stats.
 fn solve_hi(
     image: &std::path::Path,
     threads: &str,
-    memory: Option<&str>,
+    extra: &[&str],
     name: &str,
 ) -> (Vec<u8>, serde_json::Value) {
     let dir = image.parent().unwrap();
@@ -96,9 +96,7 @@ fn solve_hi(
         s(&json),
         "-q",
     ];
-    if let Some(m) = memory {
-        args.extend(["--memory", m]);
-    }
+    args.extend_from_slice(extra);
     let out = hirad(&args);
     assert!(
         out.status.success(),
@@ -123,7 +121,7 @@ fn uneven_siblings_with_polygons_between_them_open_as_jobs() {
         let closed = groups as u64 * (big as u64 + 1);
         let mut first: Option<Vec<u8>> = None;
         for threads in ["1", "2", "3"] {
-            let (bytes, v) = solve_hi(&image, threads, None, &format!("jobs_{groups}"));
+            let (bytes, v) = solve_hi(&image, threads, &[], &format!("jobs_{groups}"));
             let text = String::from_utf8(bytes.clone()).unwrap();
             let ids: Vec<usize> = text
                 .lines()
@@ -177,7 +175,7 @@ fn a_budget_refines_alike_on_any_number_of_threads() {
             let mut first: Option<Vec<u8>> = None;
             for threads in ["1", "2", "3"] {
                 let name = format!("b_{groups}_{scale}");
-                let (bytes, v) = solve_hi(&image, threads, Some(&memory), &name);
+                let (bytes, v) = solve_hi(&image, threads, &["--memory", &memory], &name);
                 if v["budget_limited"] == true && threads == "1" {
                     limited += 1;
                 }
@@ -196,4 +194,38 @@ fn a_budget_refines_alike_on_any_number_of_threads() {
         limited >= 2,
         "only {limited} of the budgets limited refinement"
     );
+}
+
+/// Closed instances that reach each other through links (tables only with
+/// `--blocking-polygons 0`, so no exchange between them) gather each iteration from the
+/// light all of them held before it (`hr::instance_gather`): on one thread each instance
+/// takes its change in place, on more in a copy on the threads written back in order; any
+/// number of threads gives the same bytes, and the solve passes its power balance.
+#[test]
+fn closed_instances_linked_to_each_other_gather_alike_on_any_number_of_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    for (groups, big, leaves) in [(3u32, 2u32, 12u32), (6, 1, 24)] {
+        let case = format!("{groups} groups, {big} bushes of {leaves} leaves each");
+        let text = scene(groups, big, leaves);
+        let path = write(dir.path(), &format!("linked_{groups}.hir"), &text);
+        let image = dir.path().join(format!("linked_{groups}.hirb"));
+        let out = coarse_tables(&path, &image);
+        assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+        let closed = groups as u64 * (big as u64 + 1);
+        let mut first: Option<Vec<u8>> = None;
+        for threads in ["1", "2", "3"] {
+            let name = format!("linked_{groups}");
+            let extra = ["--blocking-polygons", "0"];
+            let (bytes, v) = solve_hi(&image, threads, &extra, &name);
+            assert_eq!(v["verdict"]["passed"], true, "{case}: {}", v["verdict"]);
+            assert_eq!(v["levels"]["solved"], closed + 1, "{case}: {}", v["levels"]);
+            match &first {
+                None => first = Some(bytes),
+                Some(f) => assert!(
+                    *f == bytes,
+                    "{case}: --threads {threads} changed the results"
+                ),
+            }
+        }
+    }
 }
