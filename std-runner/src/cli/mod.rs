@@ -7,6 +7,7 @@ mod info;
 mod instancing;
 mod progress;
 mod solve;
+mod solve_args;
 mod solve_tables;
 mod solve_view;
 mod tables;
@@ -61,7 +62,7 @@ pub enum Command {
     ///
     /// Radiosity in W/m^2 by hierarchical radiosity (default) or the exact full-matrix
     /// solver; optionally the error against a reference results table.
-    Solve(solve::Args),
+    Solve(solve_args::Args),
     /// Directional tables of the instanced originals: tau, areas, phase function
     ///
     /// Each original is solved alone under suns from a grid of directions; the tables are

@@ -1,7 +1,7 @@
 //! `hirad solve --method hi` on a scene without some of its tables: they come from the
 //! table cache, or are made before the solve (and cached).
 
-use super::solve::{Args, Method};
+use super::solve_args::{Args, Method};
 use crate::output::Progress;
 use crate::scene::Scene;
 use crate::tables::Completed;

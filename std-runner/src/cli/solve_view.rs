@@ -1,7 +1,7 @@
 //! `hirad solve --image`'s view: its size and camera, chosen on the scene model before the
 //! solve (a solve that reads its `.hirb` as it goes then drops the model's vertices).
 
-use super::solve::{Args, DEFAULT_SIZE};
+use super::solve_args::{Args, DEFAULT_SIZE};
 use crate::exit::usage;
 use crate::output;
 use anyhow::{Result, anyhow};
