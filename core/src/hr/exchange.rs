@@ -21,7 +21,7 @@
 
 use super::exec::{Executor, Fallback, Progress, run_chunks, run_chunks_scaled};
 use super::ids::{Elem, Kind};
-use super::layout::{CHUNK, up};
+use super::layout::up;
 use super::state::{Handed, State};
 use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::{MAX_BANDS, NONE};
@@ -333,7 +333,7 @@ pub(crate) fn gather<E: Executor>(st: &State, ws: &mut [u8], ex: &mut Fallback<'
         ex,
         &mut ctx,
         (n as usize).div_ceil(ESCAPING_CHUNK),
-        CHUNK / ESCAPING_CHUNK,
+        1,
         ESCAPING_CHUNK * per,
         |c: &GatherCtx<'_>, chunk, buf| {
             buf.fill(0.0);
@@ -388,7 +388,8 @@ pub(crate) fn gather<E: Executor>(st: &State, ws: &mut [u8], ex: &mut Fallback<'
 }
 
 /// Emitters per chunk of [`gather`]'s escaping power: two fit the executor's scratch
-/// (`CHUNK` times at least `4 + 2 bands` floats) at any number of bands.
+/// (`CHUNK` times at least `4 + 2 bands` floats) at any number of bands. A call takes the
+/// executor's batch of chunks (its outputs, about 1 KB a chunk at two bands, stay small).
 const ESCAPING_CHUNK: usize = 2;
 
 /// The state shared by [`gather`]'s chunks.

@@ -10,7 +10,6 @@ use super::exchange::CELLS;
 use super::exec::{Executor, Fallback, run_chunks_scaled};
 use super::ids::{Elem, Kind};
 use super::instance_light::{MAX_CONE, cone_directions, hand, hand_into, link_flux};
-use super::layout::CHUNK;
 use super::pool::{floats, floats_mut};
 use super::state::{Handed, State};
 use crate::limits::{MAX_BANDS, NONE};
@@ -47,7 +46,7 @@ pub(crate) fn gather_instances<E: Executor>(
         ex,
         &mut ctx,
         n.div_ceil(LINKS_CHUNK),
-        CHUNK / LINKS_CHUNK,
+        1,
         LINKS_CHUNK * per,
         |c: &Ctx<'_>, chunk, buf| {
             buf.fill(0.0);
@@ -148,31 +147,40 @@ fn take_changes<E: Executor>(st: &State, ws: &mut [u8], ex: &mut Fallback<'_, E>
         .map(|i| block(st, ws, i).2)
         .max()
         .unwrap_or(0);
+    // A few instances per thread at a time: each chunk's output is a whole instance's
+    // light (24 KB for a branch of 1,449 polygons), and the executor keeps its outputs.
+    let group = TAKE_PER_THREAD * ex.inner.parallelism();
     let mut ctx = Ctx { st, ws };
-    run_chunks_scaled(
-        ex,
-        &mut ctx,
-        n,
-        1,
-        longest,
-        |c: &Ctx<'_>, i, buf| {
-            let (st, ws, i) = (c.st, &*c.ws, i as u32);
-            let (at, len, all) = block(st, ws, i);
-            buf[..all].copy_from_slice(floats(ws, at, all));
-            let (light, rest) = buf[..all].split_at_mut(len);
-            let (links, exchange) = rest[2 * nb..].split_at_mut(CELLS * nb);
-            let placed = st.placed(ws, i);
-            let Ok(mut r) = crate::tables::closed::Received::over(&placed, light) else {
-                return;
-            };
-            hand_into(&placed, &mut r, links, &noted_links(st, ws, i), true);
-            let (now, first) = super::exchange::received_now(st, ws, i);
-            hand_into(&placed, &mut r, exchange, &now, first);
-        },
-        |c: &mut Ctx<'_>, i, buf| {
-            let (at, _, all) = block(c.st, c.ws, i as u32);
-            floats_mut(c.ws, at, all).copy_from_slice(&buf[..all]);
-        },
-        &mut |_, _| {},
-    );
+    for start in (0..n).step_by(group) {
+        let end = (start + group).min(n);
+        run_chunks_scaled(
+            ex,
+            &mut ctx,
+            end - start,
+            1,
+            longest,
+            |c: &Ctx<'_>, k, buf| {
+                let (st, ws, i) = (c.st, &*c.ws, (start + k) as u32);
+                let (at, len, all) = block(st, ws, i);
+                buf[..all].copy_from_slice(floats(ws, at, all));
+                let (light, rest) = buf[..all].split_at_mut(len);
+                let (links, exchange) = rest[2 * nb..].split_at_mut(CELLS * nb);
+                let placed = st.placed(ws, i);
+                let Ok(mut r) = crate::tables::closed::Received::over(&placed, light) else {
+                    return;
+                };
+                hand_into(&placed, &mut r, links, &noted_links(st, ws, i), true);
+                let (now, first) = super::exchange::received_now(st, ws, i);
+                hand_into(&placed, &mut r, exchange, &now, first);
+            },
+            |c: &mut Ctx<'_>, k, buf| {
+                let (at, _, all) = block(c.st, c.ws, (start + k) as u32);
+                floats_mut(c.ws, at, all).copy_from_slice(&buf[..all]);
+            },
+            &mut |_, _| {},
+        );
+    }
 }
+
+/// Instances per thread that [`take_changes`] hands the executor at once.
+const TAKE_PER_THREAD: usize = 4;
