@@ -216,22 +216,13 @@ pub(crate) fn hand(
     now: &[[f32; crate::limits::MAX_BANDS]; CELLS],
     first: bool,
 ) {
-    let nb = st.bands;
-    let grid = super::exchange::grid();
-    for (c, cell) in now.iter().enumerate() {
-        let Some(d) = change(&st.handed(ws, i, part)[c * nb..(c + 1) * nb], &cell[..nb]) else {
-            continue;
-        };
-        let towards = grid.direction(c as u32);
-        st.with_received(ws, i, |placed, r| {
-            r.change(placed, towards, &d[..nb], first)
-        });
-        st.handed_mut(ws, i, part)[c * nb..(c + 1) * nb].copy_from_slice(&cell[..nb]);
-    }
+    st.with_handed(ws, i, part, |placed, r, had| {
+        hand_into(placed, r, had, now, first)
+    });
 }
 
-/// [`hand`] over a copy of an instance's light (`r`) and of what `part` handed it
-/// (`had`, `CELLS * bands` floats, updated): the same changes in the same order.
+/// [`hand`] over an instance's light (`r`, in place or a copy) and what `part` handed it
+/// (`had`, `CELLS * bands` floats, updated).
 pub(crate) fn hand_into(
     placed: &crate::tables::closed::Placed<'_>,
     r: &mut crate::tables::closed::Received<&mut [f32]>,

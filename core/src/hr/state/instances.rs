@@ -213,4 +213,29 @@ impl State {
         let mut received = crate::tables::closed::Received::over(&placed, values).ok()?;
         Some(f(&placed, &mut received))
     }
+
+    /// [`Self::with_received`], with a mutable view of what `part` handed it too (see
+    /// [`Self::handed`]).
+    pub(crate) fn with_handed<R>(
+        &self,
+        ws: &mut [u8],
+        i: u32,
+        part: Handed,
+        f: impl FnOnce(
+            &crate::tables::closed::Placed<'_>,
+            &mut crate::tables::closed::Received<&mut [f32]>,
+            &mut [f32],
+        ) -> R,
+    ) -> Option<R> {
+        let leaf = self.instance(ws, i);
+        let (at, n) = self.received_at(ws, i);
+        let split = self.lay.slots;
+        let (head, tail) = ws.split_at_mut(split);
+        let placed = self.placed_in(&leaf, tail, split);
+        let from = 2 * self.bands + part as usize * CELLS * self.bands;
+        let block = floats_mut(head, at, n + from + CELLS * self.bands);
+        let (values, rest) = block.split_at_mut(n);
+        let mut received = crate::tables::closed::Received::over(&placed, values).ok()?;
+        Some(f(&placed, &mut received, &mut rest[from..]))
+    }
 }
