@@ -381,3 +381,69 @@ fn an_emitting_original_is_expanded_in_place_never_closed() {
         "{err}"
     );
 }
+
+/// Without `--method`: hr on a scene without tables (with a note that hi could close some
+/// of its instances), hi on one that carries the tables of an original `auto` closes; each
+/// gives the results of the method named. A scene without instances says nothing of hi.
+#[test]
+fn the_default_method_is_hi_where_the_scene_carries_its_tables() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("lamps.hir");
+    std::fs::write(&scene, lamp_room()).unwrap();
+    let made = dir.path().join("lamps.hirb");
+    let mut args = vec!["tables", s(&scene), "-o", s(&made), "--no-cache", "-q"];
+    args.extend(COARSE_TABLES);
+    hirad(&args);
+    assert!(made.exists());
+    // (method in the stats, stderr, results table) of a solve of `scene` with `extra`.
+    let solve = |scene: &std::path::Path, extra: &[&str], tag: &str| {
+        let (csv, json) = (
+            dir.path().join(format!("{tag}.csv")),
+            dir.path().join(format!("{tag}.json")),
+        );
+        let mut args = vec!["solve", s(scene), "--results", s(&csv), "--stats", s(&json)];
+        args.extend(extra);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hirad"))
+            .args(&args)
+            .env("HIRAD_CACHE", dir.path().join("cache"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{tag}: {err}");
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let method = stats["method"].as_str().unwrap().to_string();
+        (method, err, std::fs::read(&csv).unwrap())
+    };
+    let (method, err, default_text) = solve(&scene, &[], "text");
+    assert_eq!(method, "hr", "{err}");
+    assert!(
+        err.contains("note: solving with --method hr") && err.contains("hirad tables"),
+        "{err}"
+    );
+    assert!(!err.contains("instancing auto:"), "{err}");
+    let (method, _, hr) = solve(&scene, &["--method", "hr"], "hr");
+    assert_eq!(method, "hr");
+    assert!(default_text == hr, "the default differs from --method hr");
+
+    let (method, err, default_image) = solve(&made, &[], "image");
+    assert_eq!(method, "hi", "{err}");
+    assert!(
+        err.contains("note: solving with --method hi") && err.contains("crate: closed"),
+        "{err}"
+    );
+    let (method, _, hi) = solve(&made, &["--method", "hi"], "hi");
+    assert_eq!(method, "hi");
+    assert!(default_image == hi, "the default differs from --method hi");
+    // A policy given alone asks for hi, on the scene without tables too (made, cached).
+    let (method, err, _) = solve(
+        &scene,
+        &["--instancing", "auto", "--table-max-side", "8"],
+        "auto",
+    );
+    assert_eq!(method, "hi", "{err}");
+
+    let (method, err, _) = solve(&fixture("cornell_box.hir"), &[], "box");
+    assert_eq!(method, "hr");
+    assert!(!err.contains("note: solving with"), "{err}");
+}

@@ -18,27 +18,12 @@ use std::time::Instant;
 pub fn run(a: Args) -> Result<()> {
     let start = Instant::now();
     let refuse = |m: String| Err(usage(anyhow!(m)));
-    if a.instancing.is_some() && a.method != Method::Hi {
+    if let (Some(_), Some(m @ (Method::Hr | Method::Exact))) = (a.instancing, a.method_given) {
         return refuse(format!(
             "--instancing chooses which instances --method hi keeps closed; --method {} expands every instance",
-            if a.method == Method::Hr {
-                "hr"
-            } else {
-                "exact"
-            }
+            if m == Method::Hr { "hr" } else { "exact" }
         ));
     }
-    // `hi` with every instance expanded is hierarchical radiosity over the whole scene: the
-    // same solver, and the same results, as `--method hr`.
-    let instancing = (a.method == Method::Hi).then(|| a.instancing.unwrap_or(Policy::Auto));
-    let a = Args {
-        method: if instancing == Some(Policy::None) {
-            Method::Hr
-        } else {
-            a.method
-        },
-        ..a
-    };
     if !(a.epsilon.is_finite() && a.epsilon > 0.0) {
         return refuse(format!(
             "--epsilon must be a positive number, got {}",
@@ -66,22 +51,41 @@ pub fn run(a: Args) -> Result<()> {
         Some(n) => n as usize,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    warn_unused(&a);
-    // Hierarchical instantiation from a `.hirb` that holds every table it needs reads the
-    // file on demand: its tables go into the workspace once, and the model keeps only their
-    // records (a canopy's are 20 MB a copy: loading them twice over was the run's peak).
-    let binary_hi = a.method == Method::Hi
-        && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
-    // Which originals hi closes (`--instancing`), decided on the file's image where there is
-    // one, else on the loaded scene's.
-    let mut decision: Option<Decision> = match instancing {
-        Some(p) if binary_hi => Some(instancing::decide(
+    // The policy `hi` would follow (the method given, or the default, which is `hi` where
+    // that policy closes some instance). `hi` with every instance expanded is hierarchical
+    // radiosity over the whole scene: the same solver, and the same results, as `hr`.
+    let policy = matches!(a.method_given, None | Some(Method::Hi))
+        .then(|| a.instancing.unwrap_or(Policy::Auto))
+        .filter(|&p| p != Policy::None);
+    let binary = files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
+    // Which originals hi closes, decided on the file's image where there is one, else on the
+    // loaded scene's.
+    let mut decision: Option<Decision> = match policy {
+        Some(p) if binary => Some(instancing::decide(
             &a.scene,
             &files::open_image(&a.scene)?,
             p,
         )?),
         _ => None,
     };
+    let hi_by_default = |d: &Option<Decision>| d.as_ref().is_some_and(|d| d.hi_by_default());
+    let mut method = match (a.method_given, policy) {
+        (Some(Method::Hi), None) => Some(Method::Hr),
+        (Some(m), _) => Some(m),
+        (None, None) => Some(Method::Hr),
+        // A policy given asks for hi.
+        (None, Some(_)) if a.instancing.is_some() => Some(Method::Hi),
+        (None, Some(_)) if binary => Some(if hi_by_default(&decision) {
+            Method::Hi
+        } else {
+            Method::Hr
+        }),
+        (None, Some(_)) => None,
+    };
+    // Hierarchical instantiation from a `.hirb` that holds every table it needs reads the
+    // file on demand: its tables go into the workspace once, and the model keeps only their
+    // records (a canopy's are 20 MB a copy: loading them twice over was the run's peak).
+    let binary_hi = binary && method == Some(Method::Hi);
     let mut loaded = if binary_hi {
         let lean = files::load_scene_records(&a.scene)?;
         let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();
@@ -94,15 +98,50 @@ pub fn run(a: Args) -> Result<()> {
         files::load_scene(&a.scene)?
     };
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
-    if let (Some(p), None) = (instancing, &decision)
-        && p != Policy::None
+    if let (Some(p), None, Some(Method::Hi) | None) = (policy, &decision, method)
+        && !loaded.scene.originals.is_empty()
     {
         decision = Some(instancing::decide_model(&a.scene, &loaded.scene, p)?);
     }
+    let method = method.get_or_insert(if hi_by_default(&decision) {
+        Method::Hi
+    } else {
+        Method::Hr
+    });
+    if *method != Method::Hi {
+        if a.method_given.is_none()
+            && !a.quiet
+            && decision
+                .as_ref()
+                .is_some_and(|d| d.closed().next().is_some())
+        {
+            eprintln!(
+                "note: solving with --method hr, every instance expanded: the scene carries no directional tables (`hirad tables SCENE -o OUT.hirb` makes them; --method hi solves level by level, making them first)"
+            );
+        }
+        decision = None;
+    }
+    // The policy the report names: hi's, including `--instancing none` (hi expanding every
+    // instance, solved as hr).
+    let instancing = match (a.method_given, *method) {
+        (_, Method::Hi) => Some(a.instancing.unwrap_or(Policy::Auto)),
+        (Some(Method::Hi) | None, _) => a.instancing.filter(|&p| p == Policy::None),
+        _ => None,
+    };
     if let Some(d) = &decision {
+        if a.method_given.is_none() && !a.quiet {
+            eprintln!(
+                "note: solving with --method hi, the default for a scene that carries its tables or whose instances are too many to expand (--method hr expands every instance)"
+            );
+        }
         instancing::print(d, a.quiet);
         instancing::refuse_closed_emitter(d)?;
     }
+    let a = Args {
+        method: *method,
+        ..a
+    };
+    warn_unused(&a);
     let progress = Progress::new(a.quiet);
     let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();
     let tables_made =
@@ -292,7 +331,7 @@ pub fn run(a: Args) -> Result<()> {
             max_iterations: hr.then_some(a.max_iterations),
             max_imbalance_percent: Some(a.max_imbalance),
             memory_bytes: if hr { a.memory } else { None },
-            visibility: hr.then(|| format!("{:?}", a.visibility).to_lowercase()),
+            visibility: hr.then(|| format!("{:?}", a.ray_caster()).to_lowercase()),
             blocking_polygons: (a.method == Method::Hi).then_some(a.blocking_polygons),
             own_polygons: (a.method == Method::Hi).then_some(a.own_polygons),
             instancing: instancing.map(|p| p.to_string()),
@@ -362,7 +401,7 @@ pub fn run(a: Args) -> Result<()> {
                     &settings,
                     threads,
                     a.memory,
-                    a.visibility,
+                    a.ray_caster(),
                     &progress,
                     &mut outputs,
                 )

@@ -15,8 +15,9 @@ pub enum Method {
     Hr,
     /// Hierarchical instantiation (the paper's method): the scene solved level by level,
     /// instances closed through their originals' directional tables and opened one at a
-    /// time, so that memory holds one path of levels. Needs the tables in the image
-    /// (`hirad tables SCENE -o OUT.hirb`); uses the core's own BVH.
+    /// time, so that memory holds one path of levels. Tables the file lacks come from the
+    /// table cache or are made first (`hirad tables SCENE -o OUT.hirb` keeps them in a
+    /// file); uses the core's own BVH.
     Hi,
     /// Classic full-matrix radiosity on a uniformly subdivided mesh (the reference; scenes
     /// of a few thousand elements).
@@ -31,8 +32,14 @@ pub enum Method {
 pub struct Args {
     /// Scene file (.hir, .hirb or .obj).
     pub scene: PathBuf,
-    /// Solver.
-    #[arg(long, value_enum, default_value_t = Method::Hr)]
+    /// Solver. Default: `hi` where `--instancing auto` closes some instance of the scene
+    /// (its instanced originals' tables come from the file, the table cache, or are made
+    /// first), else `hr` (a scene without instances, or whose instances are all expanded in
+    /// place: the same solution, hr's own ray caster).
+    #[arg(long = "method", value_enum)]
+    pub method_given: Option<Method>,
+    /// The solver the run uses: `method_given`, or the default `run` chose for the scene.
+    #[arg(skip = Method::Hr)]
     pub method: Method,
     /// Which instances `--method hi` keeps closed: `all` (each level's instances closed
     /// through their tables, then opened one at a time), `every:N` (the instances at
@@ -110,9 +117,9 @@ pub struct Args {
     /// from --method exact) and print its relative L2 error in percent.
     #[arg(long)]
     pub reference_image: Option<PathBuf>,
-    /// Ray caster for hr.
-    #[arg(long, value_enum, default_value_t = VisibilityChoice::Obvhs)]
-    pub visibility: VisibilityChoice,
+    /// Ray caster for hr (default: obvhs; hi always casts with the core's own BVH).
+    #[arg(long, value_enum)]
+    pub visibility: Option<VisibilityChoice>,
     /// Visibility rays per receiver point and link.
     #[arg(long, default_value_t = Settings::default().rays,
           value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -219,7 +226,7 @@ pub(super) fn warn_unused(a: &Args) {
         eprintln!("warning: --up has no effect with --camera (the camera gives its own up)");
     }
     let hr = a.method != Method::Exact;
-    if a.method == Method::Hi && a.visibility != VisibilityChoice::Core {
+    if a.method == Method::Hi && a.visibility.is_some_and(|v| v != VisibilityChoice::Core) {
         eprintln!(
             "note: --method hi casts its rays with the core's own BVH, level by level (--visibility has no effect)"
         );
@@ -238,6 +245,17 @@ pub(super) fn warn_unused(a: &Args) {
     }
     if a.method == Method::Exact && a.epsilon != 1e-3 {
         eprintln!("warning: --epsilon has no effect with --method exact (see --elements)");
+    }
+}
+
+impl Args {
+    /// The ray caster the run uses: the core's BVH for hi, else `--visibility` (obvhs by
+    /// default).
+    pub fn ray_caster(&self) -> VisibilityChoice {
+        match self.method {
+            Method::Hi => VisibilityChoice::Core,
+            _ => self.visibility.unwrap_or(VisibilityChoice::Obvhs),
+        }
     }
 }
 

@@ -72,6 +72,11 @@ impl std::fmt::Display for Policy {
     }
 }
 
+/// Polygons (expanded) of one original's instances above which a scene without its tables
+/// is still solved with hi by default: hr holds about a kilobyte per polygon (the paper
+/// stand's 1.21 million took 1.18 GB).
+pub const HI_DEFAULT_POLYGONS: u64 = 1_000_000;
+
 /// What the policy chose for one original.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Choice {
@@ -119,6 +124,19 @@ impl Decision {
             .enumerate()
             .filter(|(_, c)| c.closed && c.instances > 0)
             .map(|(k, _)| k)
+    }
+
+    /// Whether `hirad solve` without `--method` solves with hi: the policy closes an
+    /// original whose tables the scene carries, or one whose instances hold more than
+    /// [`HI_DEFAULT_POLYGONS`] polygons once expanded (more than hr holds in a sensible
+    /// memory). Otherwise hi would first make tables that hr does not need (minutes per
+    /// original), so the default is hr.
+    pub fn hi_by_default(&self) -> bool {
+        self.originals.iter().any(|c| {
+            c.closed
+                && c.instances > 0
+                && (c.has_tables || c.instances.saturating_mul(c.polygons) > HI_DEFAULT_POLYGONS)
+        })
     }
 
     /// The first original the policy closes although it emits light: its tables carry
@@ -368,6 +386,45 @@ mod tests {
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/small_plant.hir");
         let scene = crate::files::load_scene(&path).unwrap().scene;
         crate::scene::compile(&scene).unwrap()
+    }
+
+    #[test]
+    fn hi_is_the_default_where_tables_are_carried_or_instances_too_many() {
+        let choice = |instances: u64, polygons: u64, has_tables: bool, closed: bool| Choice {
+            name: "o".into(),
+            instances,
+            polygons,
+            depth: 1,
+            emits: false,
+            has_tables,
+            closed,
+            why: String::new(),
+        };
+        let decision = |originals: Vec<Choice>| Decision {
+            policy: Policy::Auto,
+            inline: Vec::new(),
+            originals,
+        };
+        let many = HI_DEFAULT_POLYGONS / 1000 + 1;
+        for (originals, hi) in [
+            (vec![choice(10, 500, true, true)], true),
+            (vec![choice(10, 500, false, true)], false),
+            (vec![choice(many, 1000, false, true)], true),
+            (vec![choice(many, 1000, false, false)], false),
+            (vec![choice(10, 500, true, false)], false),
+            (vec![choice(0, 500, true, true)], false),
+            (
+                vec![choice(10, 500, false, true), choice(3, 80, true, true)],
+                true,
+            ),
+            (Vec::new(), false),
+        ] {
+            assert_eq!(
+                decision(originals.clone()).hi_by_default(),
+                hi,
+                "{originals:?}"
+            );
+        }
     }
 
     #[test]
