@@ -241,3 +241,89 @@ fn a_budget_below_the_least_with_own_polygons_turns_them_off() {
         assert_eq!(json["levels"]["own_blocking_instances"], count, "n {n}");
     }
 }
+
+/// A `--memory` budget below hi's least even without the approximate instances' own
+/// polygons, but above its least with closed instances blocking by their tables alone
+/// (`--blocking-polygons 0`: no light between them by rays, whose region keeps about 10 KB
+/// per closed instance), turns the blocking polygons off too: a note, the stats, and the
+/// results of the same settings given by name.
+#[test]
+fn a_budget_below_the_least_with_blocking_polygons_turns_them_off() {
+    use hirad_core::hr::{Inline, Settings, plan_hi, plan_hi_scratch_bytes};
+    use hirad_core::image::{SceneView, SliceSource};
+    let dir = tempfile::tempdir().unwrap();
+    for (n, count, seed) in [(6u32, 5u32, 2u32), (9, 14, 5)] {
+        let (text, _) = panels(n, count, seed);
+        let scene = write(dir.path(), &format!("tau_{seed}.hir"), &text);
+        let image = dir.path().join(format!("tau_{seed}.hirb"));
+        let out = coarse_tables(&scene, &image);
+        assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+        let bytes = std::fs::read(&image).unwrap();
+        let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
+        let mut scratch = vec![0u8; plan_hi_scratch_bytes(&view)];
+        let own_off = Settings {
+            own_polygons: 0,
+            ..Settings::default()
+        };
+        let all_off = Settings {
+            blocking_polygons: 0,
+            ..own_off
+        };
+        let least = |s: &Settings, scratch: &mut [u8]| {
+            plan_hi(&view, s, Inline::NONE, scratch).unwrap().min_bytes
+        };
+        let (with, without) = (least(&own_off, &mut scratch), least(&all_off, &mut scratch));
+        assert!(
+            with - without >= count as u64 * 9_000,
+            "n {n}: {without} vs {with} for {count} closed instances"
+        );
+        let run = |extra: &[&str], tag: &str| -> (String, serde_json::Value, Vec<u8>) {
+            let (stats, csv) = (
+                dir.path().join(format!("tau_{seed}_{tag}.json")),
+                dir.path().join(format!("tau_{seed}_{tag}.csv")),
+            );
+            let m = ((with + without) / 2).to_string();
+            let mut args = vec![
+                "solve",
+                s(&image),
+                "--method",
+                "hi",
+                "--instancing",
+                "all",
+                "--threads",
+                "2",
+                "--memory",
+                &m,
+                "--stats",
+                s(&stats),
+                "--results",
+                s(&csv),
+            ];
+            args.extend(extra);
+            let out = hirad(&args);
+            let err = String::from_utf8_lossy(&out.stderr).into_owned();
+            assert!(out.status.success(), "n {n}, {tag}: {err}");
+            let json = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+            (err, json, std::fs::read(&csv).unwrap())
+        };
+        let (err, json, fallen) = run(&[], "budget");
+        assert!(
+            err.contains("take each other's light through links"),
+            "n {n}: no note: {err}"
+        );
+        assert_eq!(json["levels"]["blocking_polygons"], 0, "n {n}");
+        assert_eq!(json["levels"]["own_polygons"], 0, "n {n}");
+        assert_eq!(
+            json["settings"]["blocking_polygons"],
+            Settings::BLOCKING_POLYGONS,
+            "n {n}"
+        );
+        let (err, json, named) = run(
+            &["--blocking-polygons", "0", "--own-polygons", "0"],
+            "named",
+        );
+        assert!(!err.contains("through links"), "n {n}: {err}");
+        assert_eq!(json["levels"]["blocking_polygons"], 0, "n {n}");
+        assert!(fallen == named, "n {n}: the fallback solved otherwise");
+    }
+}

@@ -163,6 +163,9 @@ pub(crate) struct Layout {
     pub source_tau: usize,
     /// The light between closed instances (see `exchange`).
     pub exchange: usize,
+    /// Whether any closed instance may send light through the exchange (some block with
+    /// polygons): without, its region keeps no rays (see `exchange::bytes_needed`).
+    pub exchange_sends: bool,
     /// Per closed instance, direction cell and band, the radiosity its contents show an
     /// observer that way (see `blockers::note_radiance`).
     pub radiance: usize,
@@ -285,7 +288,12 @@ impl Layout {
                 .checked_mul(sources as usize)?
                 .checked_mul(4)?,
         )?;
-        let exchange_at = region(super::exchange::bytes_needed(n_instances, bands))?;
+        let exchange_sends = census.blocking_bytes > 0;
+        let exchange_at = region(super::exchange::bytes_needed(
+            n_instances,
+            bands,
+            exchange_sends,
+        ))?;
         let radiance_at = region(super::blockers::radiance_bytes(n_instances, bands))?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
@@ -358,6 +366,7 @@ impl Layout {
             closed_bvh: closed_bvh_at,
             source_tau: source_tau_at,
             exchange: exchange_at,
+            exchange_sends,
             radiance: radiance_at,
             n_clusters,
             n_polygons,

@@ -416,8 +416,8 @@ pub fn run(a: Args) -> Result<()> {
                 final_gather: s.rays_by_phase.final_gather,
             });
             report.final_passes = Some(s.final_passes);
-            report.levels =
-                (a.method == Method::Hi).then(|| crate::output::Levels::of(&s, run.own_polygons));
+            report.levels = (a.method == Method::Hi)
+                .then(|| crate::output::Levels::of(&s, run.own_polygons, run.blocking_polygons));
             report.final_change_percent =
                 Some(100.0 * s.final_change as f64).filter(|_| s.final_passes > 1);
             report.phases = tables_made

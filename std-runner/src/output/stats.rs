@@ -140,6 +140,11 @@ pub struct Levels {
     /// least with them turned them off.
     #[serde(default)]
     pub own_polygons: u32,
+    /// `--blocking-polygons` as solved: as asked, or 0 where a `--memory` budget below hi's
+    /// least with them turned them off (closed instances then block by their tables'
+    /// transmittance).
+    #[serde(default)]
+    pub blocking_polygons: u32,
     /// Closed approximate instances that blocked rays with the polygons they hold.
     #[serde(default)]
     pub own_blocking_instances: u64,
@@ -216,8 +221,8 @@ pub struct LeafBin {
 
 impl Levels {
     /// The levels of a solve's statistics.
-    /// `own_polygons`: `Settings::own_polygons` as solved.
-    pub fn of(s: &hirad_core::hr::Stats, own_polygons: u32) -> Levels {
+    /// `own_polygons`, `blocking_polygons`: the settings as solved.
+    pub fn of(s: &hirad_core::hr::Stats, own_polygons: u32, blocking_polygons: u32) -> Levels {
         let leaf_histogram = s
             .leaf_histogram
             .iter()
@@ -235,6 +240,7 @@ impl Levels {
             deepest: s.level_depth,
             closed_instances: s.closed_instances,
             own_polygons,
+            blocking_polygons,
             own_blocking_instances: s.own_blocking_instances,
             levels_together: s.levels_together,
             opened_again: s.opened_again,

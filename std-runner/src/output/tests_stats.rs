@@ -94,6 +94,7 @@ fn report() -> SolveReport {
             deepest: 2,
             closed_instances: 25,
             own_polygons: 131_072,
+            blocking_polygons: 16_384,
             own_blocking_instances: 24,
             levels_together: 20,
             opened_again: 1,

@@ -41,6 +41,9 @@ pub struct HrRun {
     pub threads: usize,
     /// `Settings::own_polygons` as solved: the setting, or 0 where a budget turned it off.
     pub own_polygons: u32,
+    /// `Settings::blocking_polygons` as solved: the setting, or 0 where a budget turned it
+    /// off.
+    pub blocking_polygons: u32,
 }
 
 /// World-space corners of every polygon of the expanded scene, in global-id order.
@@ -302,6 +305,32 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
                     p = q;
                 }
             }
+            // Still below: closed instances block by their tables' transmittance and take
+            // the others' light through links, if that lets every level open (the light
+            // between closed instances by rays keeps about 10 KB per instance).
+            if let Some(m) = memory
+                && m < p.min_bytes
+                && settings.blocking_polygons > 0
+            {
+                let without = Settings {
+                    own_polygons: 0,
+                    blocking_polygons: 0,
+                    ..settings
+                };
+                let q = hr::plan_hi(view, &without, inline, &mut scratch).map_err(classify)?;
+                if q.min_bytes < p.min_bytes {
+                    if progress.enabled() {
+                        eprintln!(
+                            "note: --memory {:.1} MiB is less than the {:.1} MiB with which hi's plan surely opens every level with closed instances blocking by their originals' polygons: they block by their tables' transmittance and take each other's light through links ({:.1} MiB; --blocking-polygons 0)",
+                            mib(m),
+                            mib(p.min_bytes),
+                            mib(q.min_bytes)
+                        );
+                    }
+                    settings = without;
+                    p = q;
+                }
+            }
             Some(p)
         }
         None => None,
@@ -421,5 +450,6 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
         plan,
         threads: exec.threads(),
         own_polygons: settings.own_polygons,
+        blocking_polygons: settings.blocking_polygons,
     })
 }
