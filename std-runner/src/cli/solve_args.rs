@@ -32,11 +32,11 @@ pub enum Method {
 pub struct Args {
     /// Scene file (.hir, .hirb or .obj).
     pub scene: PathBuf,
-    /// Solver. Default: `hi` where `--instancing auto` closes some instance of the scene
-    /// (its instanced originals' tables come from the file, the table cache, or are made
-    /// first), else `hr` (a scene without instances, or whose instances are all expanded in
-    /// place: the same solution, hr's own ray caster).
-    #[arg(long = "method", value_enum)]
+    /// Solver. Default: `hi` where `--instancing auto` closes an original whose tables the
+    /// scene carries, or one whose instances hold more than 1,000,000 polygons expanded;
+    /// else `hr` (a scene without instances, or one that would first need tables made: a
+    /// note says so).
+    #[arg(long = "method", value_name = "METHOD", value_enum)]
     pub method_given: Option<Method>,
     /// The solver the run uses: `method_given`, or the default `run` chose for the scene.
     #[arg(skip = Method::Hr)]
