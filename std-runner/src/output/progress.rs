@@ -28,7 +28,7 @@ pub const REDRAW_EVERY: Duration = Duration::from_millis(100);
 const BAR: usize = 30;
 
 /// Longest phase name shown (characters).
-const PHASE_CHARS: usize = 40;
+const PHASE_CHARS: usize = 48;
 
 /// A phase that has run this long shows how long it still needs.
 const ETA_AFTER: Duration = Duration::from_secs(3);
@@ -49,6 +49,10 @@ struct State {
     shown: bool,
     /// The phase of the last line written (lines mode).
     logged: String,
+    /// Polygons final of all and their total, for a run that streams them as it goes (hi,
+    /// level by level): shown after the phase, with the time the rest needs at the run's
+    /// pace so far.
+    polygons: Option<(u64, u64)>,
     out: Box<dyn Write + Send>,
 }
 
@@ -106,6 +110,7 @@ impl Progress {
                 last_draw: None,
                 shown: false,
                 logged: String::new(),
+                polygons: None,
                 out,
             }),
         }
@@ -146,6 +151,15 @@ impl Progress {
     pub fn advance(&self, steps: u64) {
         self.update(Instant::now(), |s| {
             s.done = s.done.saturating_add(steps);
+            false
+        });
+    }
+
+    /// Sets the polygons final of the run's `total` (see [`State`]); nothing is drawn for it
+    /// alone.
+    pub fn polygons_final(&self, done: u64, total: u64) {
+        self.update(Instant::now(), |s| {
+            s.polygons = Some((done, total));
             false
         });
     }
@@ -193,6 +207,7 @@ impl Progress {
                 {
                     text.push_str(&format!(", about {} left", duration(left)));
                 }
+                text.push_str(&overall(s.polygons, elapsed));
                 let _ = writeln!(s.out, "{text}");
                 let _ = s.out.flush();
                 s.last_draw = Some(now);
@@ -210,6 +225,7 @@ impl Progress {
             if let Some(left) = remaining(s.done, s.total, now.saturating_duration_since(s.since)) {
                 text.push_str(&format!(", about {} left", duration(left)));
             }
+            text.push_str(&overall(s.polygons, elapsed));
             let _ = write!(s.out, "\r\x1b[2K{text}");
             let _ = s.out.flush();
             s.last_draw = Some(now);
@@ -232,6 +248,24 @@ pub fn remaining(done: u64, total: Option<u64>, in_phase: Duration) -> Option<Du
         return None;
     }
     Some(in_phase.mul_f64((total - done) as f64 / done as f64))
+}
+
+/// What follows the phase for a run that streams its polygons (see `State::polygons`):
+/// `; polygons final 1200/10000 (12%), about 14 min 40 s left in all`, or nothing.
+pub fn overall(polygons: Option<(u64, u64)>, elapsed: Duration) -> String {
+    let Some((done, total)) = polygons else {
+        return String::new();
+    };
+    let pct = if total == 0 {
+        100.0
+    } else {
+        (done as f64 / total as f64).clamp(0.0, 1.0) * 100.0
+    };
+    let mut text = format!("; polygons final {done}/{total} ({pct:.0}%)");
+    if let Some(left) = remaining(done, Some(total), elapsed) {
+        text.push_str(&format!(", about {} left in all", duration(left)));
+    }
+    text
 }
 
 /// `42 s`, `3 min 20 s`, `1 h 05 min`.

@@ -170,3 +170,35 @@ fn without_a_terminal_plain_lines_a_phase_each_and_few() {
         "progress 3.0 s: meshing"
     );
 }
+
+#[test]
+fn a_run_that_streams_its_polygons_shows_them_after_the_phase() {
+    use super::progress::overall;
+    assert_eq!(overall(None, Duration::from_secs(9)), "");
+    assert_eq!(
+        overall(Some((0, 10)), Duration::from_secs(9)),
+        "; polygons final 0/10 (0%)"
+    );
+    // Too early for the pace to tell; then at the run's pace so far.
+    assert_eq!(
+        overall(Some((5, 10)), Duration::from_secs(2)),
+        "; polygons final 5/10 (50%)"
+    );
+    assert_eq!(
+        overall(Some((2500, 10000)), Duration::from_secs(300)),
+        "; polygons final 2500/10000 (25%), about 15 min 00 s left in all"
+    );
+    let out = Shared::default();
+    let t0 = Instant::now();
+    let p = Progress::with_lines(Box::new(out.clone()));
+    p.phase("final gather: polygons and output (polygons)", Some(12));
+    p.polygons_final(4096, 16384);
+    p.set_at(3, t0 + Duration::from_secs(5));
+    let text = out.text();
+    assert!(text.contains("(polygons) 3/12 (25%), about "), "{text}");
+    assert!(
+        text.contains(" s left; polygons final 4096/16384 (25%), about "),
+        "{text}"
+    );
+    assert!(text.trim_end().ends_with("left in all"), "{text}");
+}

@@ -1,6 +1,7 @@
 //! Running a solve from the runner: the hierarchical solver with rayon and obvhs (or the
 //! core's own BVH), or the exact reference solver.
 
+mod counted;
 mod executor;
 pub mod policy;
 
@@ -405,7 +406,12 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
             &mut workspace,
             &mut exec,
             &mut adapter,
-            sink,
+            &mut counted::Counted {
+                inner: sink,
+                progress,
+                done: 0,
+                total: view.info().expanded_polygons,
+            },
         ),
         VisibilityChoice::Obvhs if let Some(scene) = scene => {
             let polygons = world_polygons(scene);
