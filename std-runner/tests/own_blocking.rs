@@ -242,8 +242,8 @@ fn a_budget_below_the_least_with_own_polygons_turns_them_off() {
     }
 }
 
-/// A `--memory` budget below hi's least even without the approximate instances' own
-/// polygons, but above its least with closed instances blocking by their tables alone
+/// A `--memory` budget below what surely fails even without the approximate instances' own
+/// polygons, but at hi's least with closed instances blocking by their tables alone
 /// (`--blocking-polygons 0`: no light between them by rays, whose region keeps about 10 KB
 /// per closed instance), turns the blocking polygons off too: a note, the stats, and the
 /// results of the same settings given by name.
@@ -252,7 +252,7 @@ fn a_budget_below_the_least_with_blocking_polygons_turns_them_off() {
     use hirad_core::hr::{Inline, Settings, plan_hi, plan_hi_scratch_bytes};
     use hirad_core::image::{SceneView, SliceSource};
     let dir = tempfile::tempdir().unwrap();
-    for (n, count, seed) in [(6u32, 5u32, 2u32), (9, 14, 5)] {
+    for (n, count, seed) in [(10u32, 60u32, 2u32), (14, 150, 5)] {
         let (text, _) = panels(n, count, seed);
         let scene = write(dir.path(), &format!("tau_{seed}.hir"), &text);
         let image = dir.path().join(format!("tau_{seed}.hirb"));
@@ -269,20 +269,25 @@ fn a_budget_below_the_least_with_blocking_polygons_turns_them_off() {
             blocking_polygons: 0,
             ..own_off
         };
-        let least = |s: &Settings, scratch: &mut [u8]| {
-            plan_hi(&view, s, Inline::NONE, scratch).unwrap().min_bytes
-        };
-        let (with, without) = (least(&own_off, &mut scratch), least(&all_off, &mut scratch));
+        let with = plan_hi(&view, &own_off, Inline::NONE, &mut scratch).unwrap();
+        let without = plan_hi(&view, &all_off, Inline::NONE, &mut scratch).unwrap();
         assert!(
-            with - without >= count as u64 * 9_000,
-            "n {n}: {without} vs {with} for {count} closed instances"
+            with.bare_min_bytes - without.bare_min_bytes >= count as u64 * 9_000,
+            "n {n}: {without:?} vs {with:?} for {count} closed instances"
+        );
+        // A budget that surely fails with the blocking polygons and surely opens every
+        // level without them.
+        let budget = without.min_bytes;
+        assert!(
+            budget < with.bare_min_bytes,
+            "n {n}: {without:?} vs {with:?}"
         );
         let run = |extra: &[&str], tag: &str| -> (String, serde_json::Value, Vec<u8>) {
             let (stats, csv) = (
                 dir.path().join(format!("tau_{seed}_{tag}.json")),
                 dir.path().join(format!("tau_{seed}_{tag}.csv")),
             );
-            let m = ((with + without) / 2).to_string();
+            let m = budget.to_string();
             let mut args = vec![
                 "solve",
                 s(&image),

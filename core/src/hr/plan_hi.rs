@@ -30,6 +30,10 @@ pub struct HiPlan {
     pub top_level_bytes: u64,
     /// The room left above the top level for its closed instances (bytes).
     pub children_bytes: u64,
+    /// The solve's own records, the top level's least without the margin and the least
+    /// room of the widest path below it (bytes): a workspace below it surely fails, one
+    /// between it and `min_bytes` may open every level (most need less than their margin).
+    pub bare_min_bytes: u64,
 }
 
 /// Bytes of scratch [`plan_hi`] needs.
@@ -92,5 +96,9 @@ pub fn plan_hi<S: SceneSource>(
             .saturating_add(ALIGN as u64),
         top_level_bytes,
         children_bytes,
+        bare_min_bytes: origin
+            .saturating_add(top.min_bytes)
+            .saturating_add(children.min)
+            .saturating_add(ALIGN as u64),
     })
 }
