@@ -26,7 +26,7 @@ impl<K: Sink<Error = anyhow::Error>> Sink for Counted<'_, K> {
     fn polygon(&mut self, polygon: &PolygonResult<'_>) -> anyhow::Result<()> {
         self.inner.polygon(polygon)?;
         self.done += 1;
-        if self.done % REPORT_EVERY == 0 || self.done == self.total {
+        if self.done.is_multiple_of(REPORT_EVERY) || self.done == self.total {
             self.progress.polygons_final(self.done, self.total);
         }
         Ok(())
