@@ -242,9 +242,12 @@ pub fn square_to_sphere(u: f32, v: f32) -> Vec3 {
     };
     let z = libm::copysignf(1.0 - r * r, signed);
     let s = r * libm::sqrtf((2.0 - r * r).max(0.0));
+    // One call for both (the same bits as sinf and cosf apart: checked over every f32 of
+    // [0, pi/2], where phi lies); lookups of tau compute up to nine centres each.
+    let (sin, cos) = libm::sincosf(phi);
     Vec3::new(
-        libm::copysignf(libm::cosf(phi), u) * s,
-        libm::copysignf(libm::sinf(phi), v) * s,
+        libm::copysignf(cos, u) * s,
+        libm::copysignf(sin, v) * s,
         z,
     )
 }
