@@ -245,11 +245,7 @@ pub fn square_to_sphere(u: f32, v: f32) -> Vec3 {
     // One call for both (the same bits as sinf and cosf apart: checked over every f32 of
     // [0, pi/2], where phi lies); lookups of tau compute up to nine centres each.
     let (sin, cos) = libm::sincosf(phi);
-    Vec3::new(
-        libm::copysignf(cos, u) * s,
-        libm::copysignf(sin, v) * s,
-        z,
-    )
+    Vec3::new(libm::copysignf(cos, u) * s, libm::copysignf(sin, v) * s, z)
 }
 
 /// The inverse of [`square_to_sphere`]: the point of `[-1, 1]^2` of the direction `d` (any
