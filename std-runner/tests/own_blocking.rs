@@ -162,6 +162,23 @@ fn closed_approximate_instances_shade_with_their_own_polygons() {
     }
 }
 
+/// [`panels`] with coarse tables as `NAME.hirb` in `dir`: its path and bytes.
+fn panels_image(
+    dir: &std::path::Path,
+    name: &str,
+    n: u32,
+    count: u32,
+    seed: u32,
+) -> (std::path::PathBuf, Vec<u8>) {
+    let (text, _) = panels(n, count, seed);
+    let scene = write(dir, &format!("{name}.hir"), &text);
+    let image = dir.join(format!("{name}.hirb"));
+    let out = coarse_tables(&scene, &image);
+    assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+    let bytes = std::fs::read(&image).unwrap();
+    (image, bytes)
+}
+
 /// A `--memory` budget between hi's least without the approximate instances' own polygons
 /// and its least with them turns them off (a note says so; the stats say so and count no
 /// instance blocking with them) rather than risking a level that does not fit; at the least
@@ -172,12 +189,7 @@ fn a_budget_below_the_least_with_own_polygons_turns_them_off() {
     use hirad_core::image::{SceneView, SliceSource};
     let dir = tempfile::tempdir().unwrap();
     for (n, count, seed) in [(6u32, 5u32, 1u32), (9, 14, 4)] {
-        let (text, _) = panels(n, count, seed);
-        let scene = write(dir.path(), &format!("budget_{seed}.hir"), &text);
-        let image = dir.path().join(format!("budget_{seed}.hirb"));
-        let out = coarse_tables(&scene, &image);
-        assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
-        let bytes = std::fs::read(&image).unwrap();
+        let (image, bytes) = panels_image(dir.path(), &format!("budget_{seed}"), n, count, seed);
         let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
         let mut scratch = vec![0u8; plan_hi_scratch_bytes(&view)];
         let on = Settings::default();
@@ -253,12 +265,7 @@ fn a_budget_below_the_least_with_blocking_polygons_turns_them_off() {
     use hirad_core::image::{SceneView, SliceSource};
     let dir = tempfile::tempdir().unwrap();
     for (n, count, seed) in [(10u32, 60u32, 2u32), (14, 150, 5)] {
-        let (text, _) = panels(n, count, seed);
-        let scene = write(dir.path(), &format!("tau_{seed}.hir"), &text);
-        let image = dir.path().join(format!("tau_{seed}.hirb"));
-        let out = coarse_tables(&scene, &image);
-        assert!(image.exists(), "{}", String::from_utf8_lossy(&out.stderr));
-        let bytes = std::fs::read(&image).unwrap();
+        let (image, bytes) = panels_image(dir.path(), &format!("tau_{seed}"), n, count, seed);
         let view = SceneView::open(SliceSource(&bytes[..])).unwrap();
         let mut scratch = vec![0u8; plan_hi_scratch_bytes(&view)];
         let own_off = Settings {

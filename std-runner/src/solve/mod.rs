@@ -13,7 +13,7 @@ use crate::scene::{self, ExpandVisitor, ExpandedNode, Scene};
 use crate::visibility::ObvhsVisibility;
 use anyhow::{Context, Result, anyhow};
 use glam::Vec3;
-use hirad_core::hr::{self, HrError, Inline, Plan, Settings, SolveError, Stats};
+use hirad_core::hr::{self, HiPlan, HrError, Inline, Plan, Settings, SolveError, Stats};
 use hirad_core::image::{SceneSource, SceneView};
 use hirad_core::sink::Sink;
 
@@ -255,6 +255,86 @@ fn run_hr<K: Sink<Error = anyhow::Error>>(
     )
 }
 
+/// `b` bytes in MiB.
+fn mib(b: u64) -> f64 {
+    b as f64 / (1u64 << 20) as f64
+}
+
+/// A change of settings that lowers hi's least: what it turns off, the least it answers
+/// (bytes of a plan), and what the note says of it.
+struct Fallback {
+    without: fn(&Settings) -> Option<Settings>,
+    least: fn(&HiPlan) -> u64,
+    why: &'static str,
+}
+
+/// The fallbacks in order: below the least with its margins the approximate instances' own
+/// polygons go; below what surely fails (the paper stand ran in 34 MiB against a least of
+/// 39.1 MiB with its margins) the originals' blocking polygons too, closed instances then
+/// taking each other's light through links (the light between them by rays keeps about
+/// 10 KB per instance).
+const FALLBACKS: [Fallback; 2] = [
+    Fallback {
+        without: |s| {
+            (s.own_polygons > 0).then_some(Settings {
+                own_polygons: 0,
+                ..*s
+            })
+        },
+        least: |p| p.min_bytes,
+        why: "with which hi's plan surely opens every level with closed approximate instances blocking by their own polygons: they block as their originals do (--own-polygons 0",
+    },
+    Fallback {
+        without: |s| {
+            (s.blocking_polygons > 0).then_some(Settings {
+                own_polygons: 0,
+                blocking_polygons: 0,
+                ..*s
+            })
+        },
+        least: |p| p.bare_min_bytes,
+        why: "without which hi's plan surely fails with closed instances blocking by their originals' polygons: they block by their tables' transmittance and take each other's light through links (--blocking-polygons 0",
+    },
+];
+
+/// hi's plan of `view` and the settings it solves with under the budget `memory`: each of
+/// [`FALLBACKS`] taken where the budget is below its least and the plan without is smaller
+/// (a note says so).
+fn budget_plan<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: Settings,
+    inline: Inline<'_>,
+    memory: Option<u64>,
+    progress: &Progress,
+) -> Result<(Settings, HiPlan)> {
+    let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
+    let mut settings = settings;
+    let mut p = hr::plan_hi(view, &settings, inline, &mut scratch).map_err(classify)?;
+    let Some(m) = memory else {
+        return Ok((settings, p));
+    };
+    for f in &FALLBACKS {
+        let Some(without) = (f.without)(&settings).filter(|_| m < (f.least)(&p)) else {
+            continue;
+        };
+        let q = hr::plan_hi(view, &without, inline, &mut scratch).map_err(classify)?;
+        if (f.least)(&q) < (f.least)(&p) {
+            if progress.enabled() {
+                eprintln!(
+                    "note: --memory {:.1} MiB is less than the {:.1} MiB {}: {:.1} MiB surely opens every level)",
+                    mib(m),
+                    mib((f.least)(&p)),
+                    f.why,
+                    mib(q.min_bytes)
+                );
+            }
+            settings = without;
+            p = q;
+        }
+    }
+    Ok((settings, p))
+}
+
 /// A note on the top level's closed instances' received light when it takes more than a
 /// quarter of the budget `m` (bytes): tables that keep each polygon's first scattering
 /// apart hold 16 bytes per polygon and instance at two bands, which `hirad tables
@@ -280,7 +360,7 @@ fn received_note<S: SceneSource>(
         format!(
             "note: the top level's {} closed instances keep {:.1} MiB of received light; tables made with `hirad tables --max-single-side 0` keep no polygon's first scattering apart (16 bytes per polygon and instance at two bands), at some accuracy in sunlit leaves",
             c.instances,
-            bytes as f64 / (1u64 << 20) as f64
+            mib(bytes)
         )
     })
 }
@@ -306,67 +386,12 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
     // Hierarchical instantiation holds one path of levels: without a budget it gets its own
     // plan's suggestion (the top level's estimated plan and room for its widest closed
     // instances side by side), whatever the expanded scene would need.
-    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
-    let mut settings = *settings;
-    let hi_plan = match hi_inline {
+    let (settings, hi_plan) = match hi_inline {
         Some(inline) => {
-            let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
-            let mut p = hr::plan_hi(view, &settings, inline, &mut scratch).map_err(classify)?;
-            // A budget below the plan with the approximate instances' own polygons: they
-            // block as their originals do, if that lets every level open.
-            if let Some(m) = memory
-                && m < p.min_bytes
-                && settings.own_polygons > 0
-            {
-                let without = Settings {
-                    own_polygons: 0,
-                    ..settings
-                };
-                let q = hr::plan_hi(view, &without, inline, &mut scratch).map_err(classify)?;
-                if q.min_bytes < p.min_bytes {
-                    if progress.enabled() {
-                        eprintln!(
-                            "note: --memory {:.1} MiB is less than the {:.1} MiB with which hi's plan surely opens every level with closed approximate instances blocking by their own polygons: they block as their originals do ({:.1} MiB; --own-polygons 0)",
-                            mib(m),
-                            mib(p.min_bytes),
-                            mib(q.min_bytes)
-                        );
-                    }
-                    settings = without;
-                    p = q;
-                }
-            }
-            // Below what surely fails: closed instances block by their tables' transmittance
-            // and take the others' light through links, if that lets every level open (the
-            // light between closed instances by rays keeps about 10 KB per instance). Above
-            // it the solve tries as it is (the paper stand ran in 34 MiB against a least of
-            // 39.1 MiB with its margins).
-            if let Some(m) = memory
-                && m < p.bare_min_bytes
-                && settings.blocking_polygons > 0
-            {
-                let without = Settings {
-                    own_polygons: 0,
-                    blocking_polygons: 0,
-                    ..settings
-                };
-                let q = hr::plan_hi(view, &without, inline, &mut scratch).map_err(classify)?;
-                if q.bare_min_bytes < p.bare_min_bytes {
-                    if progress.enabled() {
-                        eprintln!(
-                            "note: --memory {:.1} MiB is less than the {:.1} MiB without which hi's plan surely fails with closed instances blocking by their originals' polygons: they block by their tables' transmittance and take each other's light through links ({:.1} MiB surely opens every level; --blocking-polygons 0)",
-                            mib(m),
-                            mib(p.bare_min_bytes),
-                            mib(q.min_bytes)
-                        );
-                    }
-                    settings = without;
-                    p = q;
-                }
-            }
-            Some(p)
+            let (solved, p) = budget_plan(view, *settings, inline, memory, progress)?;
+            (solved, Some(p))
         }
-        None => None,
+        None => (*settings, None),
     };
     let settings = &settings;
     let size = match (memory, hi_plan) {

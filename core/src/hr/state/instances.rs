@@ -204,14 +204,9 @@ impl State {
             &mut crate::tables::closed::Received<&mut [f32]>,
         ) -> R,
     ) -> Option<R> {
-        let leaf = self.instance(ws, i);
-        let (at, n) = self.received_at(ws, i);
-        let split = self.lay.slots;
-        let (head, tail) = ws.split_at_mut(split);
-        let placed = self.placed_in(&leaf, tail, split);
-        let values = floats_mut(head, at, n);
-        let mut received = crate::tables::closed::Received::over(&placed, values).ok()?;
-        Some(f(&placed, &mut received))
+        self.with_handed(ws, i, Handed::Links, |placed, received, _| {
+            f(placed, received)
+        })
     }
 
     /// [`Self::with_received`], with a mutable view of what `part` handed it too (see
