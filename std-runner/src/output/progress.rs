@@ -94,6 +94,14 @@ impl Progress {
         p
     }
 
+    /// A reporter drawing every update as a bar on any writer (for tests).
+    #[cfg(test)]
+    pub(crate) fn with_every(out: Box<dyn Write + Send>) -> Self {
+        let mut p = Self::with_output(true, out);
+        p.every = true;
+        p
+    }
+
     /// A reporter on any writer (for tests).
     pub(crate) fn with_output(enabled: bool, out: Box<dyn Write + Send>) -> Self {
         let start = Instant::now();
@@ -144,6 +152,17 @@ impl Progress {
         self.update(Instant::now(), |s| {
             s.done = done;
             s.total.is_some_and(|t| done >= t)
+        });
+    }
+
+    /// Sets the steps done in the current phase and its total (sibling levels solved on
+    /// two threads report the same phase with their own totals: the line shows a pair that
+    /// belongs together).
+    pub fn set_of(&self, done: u64, total: Option<u64>) {
+        self.update(Instant::now(), |s| {
+            s.done = done;
+            s.total = total;
+            total.is_some_and(|t| done >= t)
         });
     }
 

@@ -4,6 +4,8 @@
 mod counted;
 mod executor;
 pub mod policy;
+#[cfg(test)]
+mod tests_adapter;
 
 pub use executor::RayonExecutor;
 use std::time::Instant;
@@ -130,7 +132,7 @@ impl hr::Progress for ProgressAdapter<'_> {
                 self.start(&name, Instant::now());
             }
         } else {
-            self.bar.set(done);
+            self.bar.set_of(done, (total > 0).then_some(total));
         }
     }
 }
