@@ -30,6 +30,8 @@ mod emitter_tree;
 mod emitters;
 mod error;
 mod eval;
+mod eval_gathered;
+mod eval_reciprocal;
 mod exchange;
 mod exec;
 mod final_gather;

@@ -2,7 +2,7 @@
 //! rays leave points of the emitter's polygons in cosine-distributed directions, and what
 //! the receiver takes is the share that meets one of its polygons first.
 //!
-//! Gathered at a few points of the receiver (`eval::gather_link`), the light of an emitter
+//! Gathered at a few points of the receiver (`eval_gathered::gather_link`), the light of an emitter
 //! much smaller than the receiver is heavy-tailed: most draws of four points of a furnished
 //! room see nothing of a small lamp shade, a few see it whole, so the typical link carries
 //! a fraction of its mean (a room lost 4% of its light that way). Shot from the emitter, the
@@ -81,7 +81,7 @@ pub(crate) fn shot<V: Visibility + ?Sized>(
             }
         }
         let r = st.shape(ws, recv);
-        out.witness = super::eval::witnesses(&r, &shot.wit);
+        out.witness = super::eval_gathered::witnesses(&r, &shot.wit);
     }
     Some(out)
 }
