@@ -68,12 +68,6 @@ struct Job<'w, 'b> {
     outcome: Outcome,
 }
 
-/// A worker's part of the workspace, where the jobs it takes solve their levels one after
-/// another.
-struct Part<'w> {
-    bytes: &'w mut [u8],
-}
-
 /// What a batch hands out, in global-id order.
 #[derive(Clone, Copy)]
 pub(super) enum Entry<'b> {
@@ -156,17 +150,19 @@ where
                 outcome: Outcome::Again,
             });
         }
-        let mut parts: heapless::Vec<Part<'_>, MAX_JOBS> = heapless::Vec::new();
+        // Each worker's part of the workspace, where the jobs it takes solve their levels one
+        // after another.
+        let mut parts: heapless::Vec<&mut [u8], MAX_JOBS> = heapless::Vec::new();
         let mut left = rest;
         for _ in 0..workers {
             let len = part.min(left.len());
             let (p, r) = core::mem::take(&mut left).split_at_mut(len);
             left = r;
-            let _ = parts.push(Part { bytes: p });
+            let _ = parts.push(p);
         }
         let shared = ctx.shared;
         let parts_at = origin + records;
-        let work = |k: usize, job: &mut Job<'_, '_>, part: &mut Part<'_>| {
+        let work = |k: usize, job: &mut Job<'_, '_>, part: &mut &mut [u8]| {
             let Ok(words) = bytemuck::try_cast_slice_mut::<u8, u32>(&mut job.slot[..]) else {
                 return;
             };
@@ -175,14 +171,14 @@ where
             let mut sub = Ctx::new(shared, &mut progress, &mut recorder);
             // Reported as if job k ran in part k mod workers (the stats do not depend on
             // which worker took it; every part is the same size).
-            let at = parts_at + (k % workers) * part.bytes.len();
+            let at = parts_at + (k % workers) * part.len();
             let r = open_child(
                 &mut sub,
                 st,
                 mine,
                 vis,
                 &job.item,
-                part.bytes,
+                part,
                 at,
                 &mut super::exec::Sequential,
                 depth,
