@@ -79,6 +79,10 @@ struct ProgressAdapter<'a> {
     /// theirs, each going from 0 to 100% (one bar over all passes would run backwards as
     /// the passes add links).
     pass: u64,
+    /// Levels loaded: hi's opened levels each refine with passes of their own, which one
+    /// count over all of them would not number (a line said "pass 597"): only the first
+    /// level's passes are numbered.
+    loads: u64,
     /// Seconds per phase name (without the units in parentheses), in order of appearance.
     times: Vec<(String, f64)>,
     /// The phase being timed (index into `times`) and since when.
@@ -117,11 +121,15 @@ impl hr::Progress for ProgressAdapter<'_> {
         if what != self.phase {
             self.phase = what.to_string();
             let name = phase_name(what).to_string();
-            if name == "refining" {
-                self.pass += 1;
+            match name.as_str() {
+                "refining" => self.pass += 1,
+                "loaded" => self.loads += 1,
+                _ => {}
             }
             let label = match name.as_str() {
-                "refining" | "lighting patches" | "evaluating links" if self.pass > 0 => {
+                "refining" | "lighting patches" | "evaluating links"
+                    if self.pass > 0 && self.loads <= 1 =>
+                {
                     format!("pass {}: {what}", self.pass)
                 }
                 _ => what.to_string(),
@@ -458,6 +466,7 @@ fn run_view<S: SceneSource + Sync, K: Sink<Error = anyhow::Error>>(
         bar: progress,
         phase: String::new(),
         pass: 0,
+        loads: 0,
         times: Vec::new(),
         current: None,
     };

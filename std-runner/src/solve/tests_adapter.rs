@@ -36,6 +36,7 @@ fn sibling_levels_reporting_one_phase_show_their_own_totals() {
         bar: &bar,
         phase: String::new(),
         pass: 0,
+        loads: 0,
         times: Vec::new(),
         current: None,
     };
@@ -55,4 +56,40 @@ fn sibling_levels_reporting_one_phase_show_their_own_totals() {
         "{}",
         last(&out)
     );
+}
+
+#[test]
+fn passes_are_numbered_in_the_first_level_only() {
+    let out = Shared::default();
+    let bar = Progress::with_every(Box::new(out.clone()));
+    let mut a = ProgressAdapter {
+        bar: &bar,
+        phase: String::new(),
+        pass: 0,
+        loads: 0,
+        times: Vec::new(),
+        current: None,
+    };
+    // hr, or hi's top level: its passes numbered.
+    a.report("loaded (polygons)", 10, 10);
+    for pass in 1..=2 {
+        a.report("refining (links)", 1, 0);
+        let line = last(&out);
+        assert!(
+            line.starts_with(&format!("pass {pass}: refining")),
+            "{line}"
+        );
+        a.report("evaluating links", 0, 4);
+        let line = last(&out);
+        assert!(
+            line.starts_with(&format!("pass {pass}: evaluating")),
+            "{line}"
+        );
+    }
+    // An opened level (hi): its passes are its own, not the run's third.
+    a.report("loaded (polygons)", 5, 5);
+    a.report("refining (links)", 1, 0);
+    assert!(last(&out).starts_with("refining (links)"), "{}", last(&out));
+    a.report("lighting patches", 0, 5);
+    assert!(last(&out).starts_with("lighting patches"), "{}", last(&out));
 }
