@@ -58,7 +58,7 @@ mod tests_colormap;
 #[cfg(test)]
 mod tests_image;
 #[cfg(test)]
-mod tests_progress;
+pub(crate) mod tests_progress;
 #[cfg(test)]
 mod tests_reference;
 #[cfg(test)]

@@ -2,20 +2,18 @@
 
 use super::ProgressAdapter;
 use crate::output::Progress;
+use crate::output::tests_progress::Shared;
 use hirad_core::hr::Progress as _;
-use std::io::Write;
-use std::sync::{Arc, Mutex};
 
-#[derive(Clone, Default)]
-struct Shared(Arc<Mutex<Vec<u8>>>);
-
-impl Write for Shared {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.lock().unwrap().extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
+/// An adapter on `bar`, before any report.
+fn adapter(bar: &Progress) -> ProgressAdapter<'_> {
+    ProgressAdapter {
+        bar,
+        phase: String::new(),
+        pass: 0,
+        loads: 0,
+        times: Vec::new(),
+        current: None,
     }
 }
 
@@ -32,14 +30,7 @@ fn last(out: &Shared) -> String {
 fn sibling_levels_reporting_one_phase_show_their_own_totals() {
     let out = Shared::default();
     let bar = Progress::with_every(Box::new(out.clone()));
-    let mut a = ProgressAdapter {
-        bar: &bar,
-        phase: String::new(),
-        pass: 0,
-        loads: 0,
-        times: Vec::new(),
-        current: None,
-    };
+    let mut a = adapter(&bar);
     let phase = "final gather: polygons and output (polygons)";
     // Two levels on two threads: one of 12 polygons, one of 287, through one reporter.
     a.report(phase, 0, 12);
@@ -62,14 +53,7 @@ fn sibling_levels_reporting_one_phase_show_their_own_totals() {
 fn passes_are_numbered_in_the_first_level_only() {
     let out = Shared::default();
     let bar = Progress::with_every(Box::new(out.clone()));
-    let mut a = ProgressAdapter {
-        bar: &bar,
-        phase: String::new(),
-        pass: 0,
-        loads: 0,
-        times: Vec::new(),
-        current: None,
-    };
+    let mut a = adapter(&bar);
     // hr, or hi's top level: its passes numbered.
     a.report("loaded (polygons)", 10, 10);
     for pass in 1..=2 {
