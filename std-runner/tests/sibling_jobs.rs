@@ -2,7 +2,8 @@
 //! instances are of very uneven sizes and have the level's own polygons between them. With
 //! any number of threads the results table is the same bytes, every polygon appears once
 //! in global-id order, and with more than one thread every closed instance is opened as a
-//! job (the polygons between them do not break the batches).
+//! job (the polygons between them do not break the batches), whose time the stats give
+//! as a phase of its own.
 
 mod common;
 
@@ -142,6 +143,20 @@ fn uneven_siblings_with_polygons_between_them_open_as_jobs() {
             let together = levels["levels_together"].as_u64().unwrap();
             let want = if threads == "1" { 0 } else { closed };
             assert_eq!(together, want, "{case}, {threads} threads: {levels}");
+            // The workers' time is the jobs' phase's, not the phase the main thread last
+            // reported (the 10-tree forest's 'power balance' took half its wall time).
+            let phases: Vec<&str> = v["phases"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|p| p["phase"].as_str().unwrap())
+                .collect();
+            let jobs = phases.contains(&"opening levels as jobs");
+            assert_eq!(
+                jobs,
+                threads != "1",
+                "{case}, {threads} threads: {phases:?}"
+            );
         }
     }
 }

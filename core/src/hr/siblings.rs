@@ -193,7 +193,12 @@ where
                 Err(SolveError::Hr(e)) => Outcome::Failed(e),
             };
         };
+        // The workers report nothing while they solve (their levels' phases interleave):
+        // the time goes to this phase, not to the last one this thread reported.
+        let n = jobs.len() as u64;
+        ctx.progress.report(JOBS_PHASE, 0, n);
         exec.run_jobs(&mut jobs, &mut parts, &work);
+        ctx.progress.report(JOBS_PHASE, n, n);
         for job in &jobs {
             let _ = outcomes.push((job.outcome, job.tally, job.recorded));
         }
@@ -252,6 +257,9 @@ where
     }
     Ok(())
 }
+
+/// The progress phase of sibling levels solved as jobs by the workers.
+pub(super) const JOBS_PHASE: &str = "opening levels as jobs (levels)";
 
 /// Opens closed instance `item` of level `st` (at `depth`): its beams into `free`, then its
 /// contents as the next level above them.
