@@ -143,13 +143,17 @@ pub(crate) const MAX_ALONG: usize = 32;
 /// as radiosity (W/m^2 per band, `pi` times radiance: what a gather ray adds), nearer ones
 /// first, each behind what the nearer let through; `out` gets it added times `weight`.
 /// Instance `skip` (an opened one, or `NONE`) is not there. Returns what they let through
-/// all together (the weight of whatever lies behind them, before `weight`).
+/// all together (the weight of whatever lies behind them, before `weight`). A polygon met
+/// where `local` (the opened level's light by place) knows the light around reads that
+/// instead of its instance's tables (see `local_field`).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn light_along(
     st: &State,
     ws: &[u8],
     from: Vec3,
     to: Vec3,
     skip: u32,
+    local: Option<&super::local_field::LocalField<'_>>,
     weight: f32,
     out: &mut [f32],
 ) -> f32 {
@@ -225,6 +229,31 @@ pub(crate) fn light_along(
             // The met polygon's height slice, once for every band: its original's polygon,
             // or where the ray met one of the instance's own (see `Blocking::Own`).
             let own_hit = q == NONE && st.instance(ws, i).own_polygons != 0;
+            // A polygon of its original met among the opened level's polygons: their light.
+            let mut around = [0.0f32; MAX_BANDS];
+            let near = own.is_none()
+                && q != NONE
+                && local.is_some_and(|l| {
+                    let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) else {
+                        return false;
+                    };
+                    let two = g.two_sided(q);
+                    // The back of a one-sided polygon shows nothing.
+                    if !two && g.normal(q).dot(st.placed(ws, i).local(-d)) < 0.0 {
+                        return true;
+                    }
+                    l.radiosity(from + (to - from) * at, two, &mut around[..st.bands])
+                });
+            if near {
+                for (band, o) in out.iter_mut().enumerate() {
+                    *o += w * around[band];
+                }
+                through *= t;
+                if through <= 0.0 {
+                    break;
+                }
+                continue;
+            }
             let bin = if own.is_some() {
                 height_bin(st, ws, i, q)
             } else if own_hit {

@@ -185,7 +185,7 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
         // Closed instances on the way: their light, and what they let through to the rest.
         let through = if st.instances > 0 {
             let to = first.map_or(end, |(_, t)| x + (end - x) * t);
-            super::blockers::light_along(st, ws, x, to, NONE, 1.0, &mut c[..nb])
+            super::blockers::light_along(st, ws, x, to, NONE, None, 1.0, &mut c[..nb])
         } else {
             1.0
         };

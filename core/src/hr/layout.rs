@@ -169,6 +169,9 @@ pub(crate) struct Layout {
     /// Per closed instance, direction cell and band, the radiosity its contents show an
     /// observer that way (see `blockers::note_radiance`).
     pub radiance: usize,
+    /// An opened level's light by place, read for closed siblings' polygons met inside it
+    /// (see `local_field`).
+    pub local_field: usize,
     /// Counts the regions were sized for.
     pub n_clusters: u32,
     pub n_polygons: u32,
@@ -295,6 +298,7 @@ impl Layout {
             exchange_sends,
         ))?;
         let radiance_at = region(super::blockers::radiance_bytes(n_instances, bands))?;
+        let local_field_at = region(super::local_field::bytes_needed(bands))?;
         let sources_at = region(sources as usize * strides.source)?;
         let stack_at = region((census.depth as usize + 1) * FRAME_BYTES)?;
         let group_at = region((census.max_children as usize + 1) * GROUP_ITEM_BYTES)?;
@@ -368,6 +372,7 @@ impl Layout {
             exchange: exchange_at,
             exchange_sends,
             radiance: radiance_at,
+            local_field: local_field_at,
             n_clusters,
             n_polygons,
             n_instances,

@@ -45,6 +45,7 @@ mod layout;
 mod level;
 mod load;
 mod load_instances;
+mod local_field;
 mod open;
 mod oriented;
 mod original_geometry;

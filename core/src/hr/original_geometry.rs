@@ -359,6 +359,15 @@ impl<'a> OriginalGeometry<'a> {
         })
     }
 
+    /// True when polygon `q`'s material is two-sided.
+    pub(crate) fn two_sided(&self, q: u32) -> bool {
+        self.vis
+            .polygons()
+            .counts
+            .get(q as usize)
+            .is_some_and(|&c| c & TWO_SIDED != 0)
+    }
+
     /// Polygons.
     pub(crate) fn polygons(&self) -> u32 {
         self.areas.len() as u32

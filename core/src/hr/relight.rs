@@ -107,6 +107,7 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     for pass in 1..passes {
         // What the closed instances show gather rays, as the last solution left them.
         super::blockers::note_radiance(st, ws, ex);
+        super::local_field::note(st, ws);
         let rays = relight(st, ws, vis, ex, progress, pass - 1);
         st.stats.rays += rays;
         st.stats.rays_by_phase.final_gather += rays;

@@ -161,7 +161,9 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
         let first = ray.first_hit(x, end, [crate::limits::NONE; 2]);
         let through = if st.instances > 0 {
             let to = first.map_or(end, |(_, t)| x + (end - x) * t);
-            super::blockers::light_along(st, ws, x, to, outer.opened, weight, out)
+            // The opened level's own light where its rays meet siblings inside its box.
+            let local = super::local_field::LocalField::of(self.polys.st, self.polys.ws);
+            super::blockers::light_along(st, ws, x, to, outer.opened, local.as_ref(), weight, out)
         } else {
             1.0
         };
