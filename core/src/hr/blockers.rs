@@ -237,12 +237,22 @@ pub(crate) fn light_along(
                     let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) else {
                         return false;
                     };
+                    // Inside the opened instance's own box only.
+                    let x = from + (to - from) * at;
+                    if skip == NONE || skip >= st.instances {
+                        return false;
+                    }
+                    let (lo, hi, place, _) = placed_box(st, ws, skip);
+                    let p = crate::tables::closed::local_point(&place, x);
+                    if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
+                        return false;
+                    }
                     let two = g.two_sided(q);
                     // The back of a one-sided polygon shows nothing.
                     if !two && g.normal(q).dot(st.placed(ws, i).local(-d)) < 0.0 {
                         return true;
                     }
-                    l.radiosity(from + (to - from) * at, two, &mut around[..st.bands])
+                    l.radiosity(x, two, &mut around[..st.bands])
                 });
             if near {
                 for (band, o) in out.iter_mut().enumerate() {
