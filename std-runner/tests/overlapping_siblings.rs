@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{hirad, ok, s, write};
+use common::{COARSE_TABLES, hirad, ok, s, write};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -190,26 +190,12 @@ fn both(dir: &Path, name: &str, scene: &str) -> (Absorbed, Absorbed, f64) {
     let hir = write(dir, &format!("{name}.hir"), scene);
     let hirb = dir.join(format!("{name}.hirb"));
     let cache = dir.join("cache");
-    // Coarse tables (their targets are not met: exit 1, the tables written).
-    let out = hirad(&[
-        "tables",
-        s(&hir),
-        "-o",
-        s(&hirb),
-        "--cache",
-        s(&cache),
-        "--max-side",
-        "4",
-        "--max-tau-side",
-        "8",
-        "--max-out-side",
-        "8",
-        "--max-single-side",
-        "0",
-        "--epsilon",
-        "1e-2",
-        "-q",
-    ]);
+    // Coarse tables (their targets are not met: exit 1, the tables written), no first
+    // scattering kept apart: the polygons met are then read from the field or the tables.
+    let mut args = vec!["tables", s(&hir), "-o", s(&hirb), "--cache", s(&cache)];
+    args.extend(&COARSE_TABLES[..6]);
+    args.extend(["--max-single-side", "0", "--epsilon", "1e-2", "-q"]);
+    let out = hirad(&args);
     assert!(hirb.exists(), "{}", String::from_utf8_lossy(&out.stderr));
     let mut res = Vec::new();
     for method in ["hr", "hi"] {

@@ -234,22 +234,22 @@ pub(crate) fn light_along(
             let near = own.is_none()
                 && q != NONE
                 && local.is_some_and(|l| {
-                    let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) else {
-                        return false;
-                    };
                     // Inside the opened instance's own box only.
-                    let x = from + (to - from) * at;
                     if skip == NONE || skip >= st.instances {
                         return false;
                     }
+                    let x = from + (to - from) * at;
                     let (lo, hi, place, _) = placed_box(st, ws, skip);
                     let p = crate::tables::closed::local_point(&place, x);
                     if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
                         return false;
                     }
+                    let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) else {
+                        return false;
+                    };
                     let two = g.two_sided(q);
                     // The back of a one-sided polygon shows nothing.
-                    if !two && g.normal(q).dot(st.placed(ws, i).local(-d)) < 0.0 {
+                    if !two && g.normal(q).dot(placed.local(-d)) < 0.0 {
                         return true;
                     }
                     l.radiosity(x, two, &mut around[..st.bands])

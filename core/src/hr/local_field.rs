@@ -1,7 +1,8 @@
 //! An opened level's light by place: the mean reflected radiosity of its leaf patches in
 //! each cell of a coarse grid over them, one-sided and two-sided apart. A gather ray from
 //! the opened level that meets a closed sibling's polygon *inside* the opened level's box
-//! reads it there instead of the sibling's tables (DESIGN.md "Instances inside a level"):
+//! reads it there (inside the opened instance's own box only, see `blockers::light_along`)
+//! instead of the sibling's tables (DESIGN.md "Instances inside a level"):
 //! the tables give what an observer outside the sibling's box sees (its sunlit outer
 //! leaves), where a point among the opened level's own polygons lies in their light
 //! (shaded inner leaves where the boxes overlap). Nine copies of a poplar branch 0.5 m
@@ -49,10 +50,11 @@ pub(crate) fn note(st: &State, ws: &mut [u8]) {
     let len = HEAD + CELLS * CLASSES * pc;
     // The box of the leaf patches' centres.
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    each_leaf(st, ws, |c| {
+    for p in patches(st).filter_map(|e| leaf(st, ws, e)) {
+        let c = centre(&p);
         lo = lo.min(c);
         hi = hi.max(c);
-    });
+    }
     let mut head = [0.0f32; HEAD];
     let valid = lo.x <= hi.x && (hi - lo).is_finite();
     let size = ((hi - lo) / SIDE as f32).max(Vec3::splat(1e-6));
@@ -69,30 +71,26 @@ pub(crate) fn note(st: &State, ws: &mut [u8]) {
     if !valid {
         return;
     }
-    for kind in [Kind::Patch1, Kind::Patch2] {
-        for i in 0..st.pool(kind).len {
-            let e = Elem::new(kind, i);
-            let p = st.patch(ws, e);
-            if p.first_child != NONE || p.area.is_nan() || p.area <= 0.0 {
-                continue;
-            }
-            let sides = State::sides(e);
-            let m = st.material(ws, st.polygon(ws, p.poly).material);
-            let mut v = [0.0f32; MAX_BANDS];
-            for side in 0..sides {
-                if let Some(b) = st.b(ws, e, side) {
-                    for k in 0..nb {
-                        v[k] += (b[k] - m.emit[side][k]).max(0.0) / sides as f32;
-                    }
+    for e in patches(st) {
+        let Some(p) = leaf(st, ws, e) else {
+            continue;
+        };
+        let sides = State::sides(e);
+        let m = st.material(ws, st.polygon(ws, p.poly).material);
+        let mut v = [0.0f32; MAX_BANDS];
+        for side in 0..sides {
+            if let Some(b) = st.b(ws, e, side) {
+                for k in 0..nb {
+                    v[k] += (b[k] - m.emit[side][k]).max(0.0) / sides as f32;
                 }
             }
-            let o = HEAD + (cell_of(lo, size, centre(&p)) * CLASSES + sides - 1) * pc;
-            let f = super::pool::floats_mut(ws, at, len);
-            f[o] += 1.0;
-            f[o + 1] += p.area;
-            for k in 0..nb {
-                f[o + 2 + k] += p.area * v[k];
-            }
+        }
+        let o = HEAD + (cell_of(lo, size, centre(&p)) * CLASSES + sides - 1) * pc;
+        let f = super::pool::floats_mut(ws, at, len);
+        f[o] += 1.0;
+        f[o + 1] += p.area;
+        for k in 0..nb {
+            f[o + 2 + k] += p.area * v[k];
         }
     }
 }
@@ -106,18 +104,17 @@ fn centre(p: &super::records::Patch) -> Vec3 {
     c / k.max(1) as f32
 }
 
-/// Calls `f` with the centre of each leaf patch of positive area.
-fn each_leaf(st: &State, ws: &[u8], mut f: impl FnMut(Vec3)) {
-    for kind in [Kind::Patch1, Kind::Patch2] {
-        for i in 0..st.pool(kind).len {
-            let e = Elem::new(kind, i);
-            let p = st.patch(ws, e);
-            if p.first_child != NONE || p.area.is_nan() || p.area <= 0.0 {
-                continue;
-            }
-            f(centre(&p));
-        }
-    }
+/// Every patch of the level (one-sided, then two-sided).
+fn patches(st: &State) -> impl Iterator<Item = Elem> + '_ {
+    [Kind::Patch1, Kind::Patch2]
+        .into_iter()
+        .flat_map(move |kind| (0..st.pool(kind).len).map(move |i| Elem::new(kind, i)))
+}
+
+/// Patch `e`'s record if it is a leaf of positive area.
+fn leaf(st: &State, ws: &[u8], e: Elem) -> Option<super::records::Patch> {
+    let p = st.patch(ws, e);
+    (p.first_child == NONE && p.area > 0.0).then_some(p)
 }
 
 fn cell_of(lo: Vec3, size: Vec3, x: Vec3) -> usize {

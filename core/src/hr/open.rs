@@ -287,7 +287,10 @@ where
         ctx.tally.balance.add(&balance);
         // What its closed instances show gather rays, here and from the levels opened in it.
         super::blockers::note_radiance(&st, ws, &mut seq);
-        super::local_field::note(&st, ws);
+        // What its polygons' gather rays read of its own light among its siblings.
+        if outer.is_some() {
+            super::local_field::note(&st, ws);
+        }
     }
     let total = &mut ctx.tally.stats;
     add_level(total, &st.stats, origin, depth == 0);

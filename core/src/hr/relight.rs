@@ -107,7 +107,10 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     for pass in 1..passes {
         // What the closed instances show gather rays, as the last solution left them.
         super::blockers::note_radiance(st, ws, ex);
-        super::local_field::note(st, ws);
+        // What an opened level's rays read of its own light among its siblings.
+        if matches!(vis, Vis::Nested(..)) {
+            super::local_field::note(st, ws);
+        }
         let rays = relight(st, ws, vis, ex, progress, pass - 1);
         st.stats.rays += rays;
         st.stats.rays_by_phase.final_gather += rays;

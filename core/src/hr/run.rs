@@ -271,7 +271,6 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             progress,
         );
         super::blockers::note_radiance(st, ws, &mut self.seq);
-        super::local_field::note(st, ws);
         progress.report(output::phase(st, ws), 0, st.polygons as u64);
         let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
             .map_err(SolveError::Sink)?;
