@@ -8,6 +8,7 @@
 
 use super::error::HrError;
 use super::exec::{Executor, Fallback, run_chunks_scaled};
+use super::local_field::Around;
 use super::state::State;
 use crate::bvh::{Bvh, BvhNode};
 use crate::limits::{MAX_BANDS, NONE};
@@ -144,8 +145,9 @@ pub(crate) const MAX_ALONG: usize = 32;
 /// first, each behind what the nearer let through; `out` gets it added times `weight`.
 /// Instance `skip` (an opened one, or `NONE`) is not there. Returns what they let through
 /// all together (the weight of whatever lies behind them, before `weight`). A polygon met
-/// where `local` (the opened level's light by place) knows the light around reads that
-/// instead of its instance's tables (see `local_field`).
+/// inside an opened level's box where `local` (the opened levels' light by place, innermost
+/// first) knows the light around reads that instead of its instance's tables (see
+/// `local_field`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn light_along(
     st: &State,
@@ -153,7 +155,7 @@ pub(crate) fn light_along(
     from: Vec3,
     to: Vec3,
     skip: u32,
-    local: Option<&super::local_field::LocalField<'_>>,
+    local: Option<&super::local_field::Inside<'_>>,
     weight: f32,
     out: &mut [f32],
 ) -> f32 {
@@ -234,25 +236,22 @@ pub(crate) fn light_along(
             let near = own.is_none()
                 && q != NONE
                 && local.is_some_and(|l| {
-                    // Inside the opened instance's own box only.
-                    if skip == NONE || skip >= st.instances {
-                        return false;
-                    }
+                    // Inside an opened instance's own box only.
                     let x = from + (to - from) * at;
-                    let (lo, hi, place, _) = placed_box(st, ws, skip);
-                    let p = crate::tables::closed::local_point(&place, x);
-                    if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
-                        return false;
-                    }
                     let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) else {
                         return false;
                     };
                     let two = g.two_sided(q);
-                    // The back of a one-sided polygon shows nothing.
-                    if !two && g.normal(q).dot(placed.local(-d)) < 0.0 {
-                        return true;
+                    match l.radiosity(x, two, &mut around[..st.bands]) {
+                        Around::Outside => false,
+                        // The back of a one-sided polygon shows nothing.
+                        _ if !two && g.normal(q).dot(placed.local(-d)) < 0.0 => {
+                            around.fill(0.0);
+                            true
+                        }
+                        Around::Known => true,
+                        Around::Unknown => false,
                     }
-                    l.radiosity(x, two, &mut around[..st.bands])
                 });
             if near {
                 for (band, o) in out.iter_mut().enumerate() {
@@ -603,7 +602,11 @@ fn keep_nearest(met: &mut heapless::Vec<(f32, f32, u32, u32), MAX_ALONG>, m: (f3
 }
 
 /// Closed instance `i`'s original's box, its transform to world and its table slot.
-fn placed_box(st: &State, ws: &[u8], i: u32) -> (Vec3, Vec3, crate::geometry::Similarity, u32) {
+pub(crate) fn placed_box(
+    st: &State,
+    ws: &[u8],
+    i: u32,
+) -> (Vec3, Vec3, crate::geometry::Similarity, u32) {
     let leaf = st.instance(ws, i);
     let r = st.slot(ws, leaf.slot).record;
     let place = leaf.place();

@@ -191,7 +191,7 @@ pub(crate) fn leaf<V: Visibility + ?Sized>(
         };
         if first.is_none() && through > 0.0 {
             // Out of this level: on through the levels it is open in.
-            vis.gather_beyond(x, d, through, em.outer, &mut c[..nb]);
+            vis.gather_beyond(x, d, through, em.outer, None, &mut c[..nb]);
         }
         if let Some((hit, t)) = first
             && hit < st.polygons

@@ -10,6 +10,7 @@
 
 use super::ids::{Elem, Kind};
 use super::state::State;
+use crate::geometry::Similarity;
 use crate::limits::{MAX_BANDS, NONE};
 use glam::Vec3;
 
@@ -183,5 +184,157 @@ impl<'a> LocalField<'a> {
             }
         }
         false
+    }
+}
+
+/// The opened levels a gather ray has come out of, innermost first: each one's field and
+/// the box (in the level it was opened in) where it is read. A ray that leaves an opened
+/// branch, crosses the branch's parent level and meets a closed sibling one level further
+/// out still reads the innermost level whose box holds the point.
+#[derive(Clone, Copy)]
+pub(crate) struct Inside<'a> {
+    /// The opened level's field (`None` where it was not noted).
+    pub field: Option<LocalField<'a>>,
+    /// The opened instance's box in its own frame (m), and its placement in the world.
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub place: Similarity,
+    /// The level the one above was opened from, if it is itself an opened level.
+    pub inner: Option<&'a Inside<'a>>,
+}
+
+/// What the chain of opened levels knows at a point.
+pub(crate) enum Around {
+    /// The point lies in no opened box.
+    Outside,
+    /// Inside an opened box, but no level there knows the light of that class around it.
+    Unknown,
+    /// Inside an opened box: the light around (written out).
+    Known,
+}
+
+impl Inside<'_> {
+    /// Whether the opened instance's box holds the point `x` (world, m).
+    fn holds(&self, x: Vec3) -> bool {
+        let p = crate::tables::closed::local_point(&self.place, x);
+        p.cmpge(self.lo).all() && p.cmple(self.hi).all()
+    }
+
+    /// The mean reflected radiosity of the class around `x` (W/m^2 per band, into `out`)
+    /// in the innermost opened level whose box holds `x` and whose field knows it.
+    pub(crate) fn radiosity(&self, x: Vec3, two_sided: bool, out: &mut [f32]) -> Around {
+        let inner = match self.inner {
+            Some(i) => i.radiosity(x, two_sided, out),
+            None => Around::Outside,
+        };
+        if let Around::Known = inner {
+            return inner;
+        }
+        if !self.holds(x) {
+            return inner;
+        }
+        match self.field {
+            Some(f) if f.radiosity(x, two_sided, out) => Around::Known,
+            _ => Around::Unknown,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate alloc;
+    use alloc::vec;
+    use alloc::vec::Vec;
+
+    /// A one-band field over the unit cube at `lo` holding `patches` two-sided patches of
+    /// radiosity `b` in every cell.
+    fn field(lo: Vec3, patches: f32, b: f32) -> Vec<f32> {
+        let pc = per(1);
+        let mut f = vec![0.0f32; HEAD + CELLS * CLASSES * pc];
+        f[..3].copy_from_slice(&lo.to_array());
+        f[3..6].copy_from_slice(&[1.0 / SIDE as f32; 3]);
+        f[6] = 1.0;
+        for cell in 0..CELLS {
+            let o = HEAD + (cell * CLASSES + 1) * pc;
+            f[o] = patches;
+            f[o + 1] = patches * 0.01;
+            f[o + 2] = patches * 0.01 * b;
+        }
+        f
+    }
+
+    fn unit_box_at<'a>(
+        f: Option<LocalField<'a>>,
+        at: Vec3,
+        inner: Option<&'a Inside<'a>>,
+    ) -> Inside<'a> {
+        Inside {
+            field: f,
+            lo: Vec3::ZERO,
+            hi: Vec3::ONE,
+            place: Similarity {
+                translation: at,
+                ..Similarity::IDENTITY
+            },
+            inner,
+        }
+    }
+
+    fn read(chain: &Inside<'_>, x: Vec3) -> (u8, f32) {
+        let mut out = [0.0f32; 1];
+        let r = match chain.radiosity(x, true, &mut out) {
+            Around::Outside => 0,
+            Around::Unknown => 1,
+            Around::Known => 2,
+        };
+        (r, out[0])
+    }
+
+    #[test]
+    fn innermost_box_holding_the_point_is_read_first() {
+        // An inner level in the cube at the origin (radiosity 1), inside an outer level in
+        // the cube at (0.5, 0, 0) (radiosity 5): where both boxes hold the point the inner
+        // level's light is read, where only the outer's the outer's, elsewhere nothing.
+        let (fi, fo) = (field(Vec3::ZERO, 9.0, 1.0), field(Vec3::X * 0.5, 9.0, 5.0));
+        let inner = unit_box_at(Some(LocalField { f: &fi, bands: 1 }), Vec3::ZERO, None);
+        let outer = unit_box_at(
+            Some(LocalField { f: &fo, bands: 1 }),
+            Vec3::X * 0.5,
+            Some(&inner),
+        );
+        for (x, want) in [
+            (Vec3::new(0.7, 0.5, 0.5), (2, 1.0)),
+            (Vec3::new(0.2, 0.1, 0.9), (2, 1.0)),
+            (Vec3::new(1.3, 0.5, 0.5), (2, 5.0)),
+            (Vec3::new(1.7, 0.5, 0.5), (0, 0.0)),
+            (Vec3::new(0.7, 1.5, 0.5), (0, 0.0)),
+        ] {
+            let (r, v) = read(&outer, x);
+            assert_eq!(r, want.0, "at {x}");
+            assert!((v - want.1).abs() < 1e-6, "at {x}: {v}");
+        }
+    }
+
+    #[test]
+    fn an_inner_level_without_light_of_the_class_leaves_it_to_the_outer() {
+        // The inner level holds too few patches: the outer one, whose box holds the point
+        // too, is read; with no outer field either the point is inside but unknown.
+        let (fi, fo) = (field(Vec3::ZERO, 0.0, 1.0), field(Vec3::ZERO, 9.0, 3.0));
+        let inner = unit_box_at(Some(LocalField { f: &fi, bands: 1 }), Vec3::ZERO, None);
+        let outer = unit_box_at(
+            Some(LocalField { f: &fo, bands: 1 }),
+            Vec3::ZERO,
+            Some(&inner),
+        );
+        assert_eq!(read(&outer, Vec3::splat(0.5)), (2, 3.0));
+        let bare = unit_box_at(None, Vec3::ZERO, Some(&inner));
+        assert_eq!(read(&bare, Vec3::splat(0.5)), (1, 0.0));
+        // One-sided light is not two-sided light.
+        let mut out = [0.0f32];
+        assert!(matches!(
+            outer.radiosity(Vec3::splat(0.5), false, &mut out),
+            Around::Unknown
+        ));
     }
 }

@@ -2,6 +2,7 @@
 //! workspace over the input polygons.
 
 use super::ids::Elem;
+use super::local_field::Inside;
 use super::state::State;
 use crate::bvh::{Bvh, BvhVisibility, PolygonSet};
 use crate::visibility::Visibility;
@@ -143,13 +144,15 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
     /// no polygon. Nothing in a level not opened from another.
     /// With `reflected`, a polygon met reads only what it reflects (its radiosity less its
     /// emission): the outer levels' emitters are then added directly (see
-    /// `emitters::Emitters`).
+    /// `emitters::Emitters`). `inner`: the opened levels the ray came out of before this
+    /// one (`None` from the level it was cast in).
     pub(crate) fn gather_beyond(
         &self,
         x: Vec3,
         d: Vec3,
         weight: f32,
         reflected: bool,
+        inner: Option<&Inside<'_>>,
         out: &mut [f32],
     ) {
         let Vis::Nested(_, outer) = self.vis else {
@@ -159,11 +162,22 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
         let ray = outer.ray();
         let end = st.beyond(x, d);
         let first = ray.first_hit(x, end, [crate::limits::NONE; 2]);
+        // This level's own light where rays meet siblings inside its box, and the light of
+        // the levels the ray came out of before inside theirs.
+        let inside = (outer.opened < st.instances).then(|| {
+            let (lo, hi, place, _) = super::blockers::placed_box(st, ws, outer.opened);
+            Inside {
+                field: super::local_field::LocalField::of(self.polys.st, self.polys.ws),
+                lo,
+                hi,
+                place,
+                inner,
+            }
+        });
         let through = if st.instances > 0 {
             let to = first.map_or(end, |(_, t)| x + (end - x) * t);
-            // The opened level's own light where its rays meet siblings inside its box.
-            let local = super::local_field::LocalField::of(self.polys.st, self.polys.ws);
-            super::blockers::light_along(st, ws, x, to, outer.opened, local.as_ref(), weight, out)
+            let opened = outer.opened;
+            super::blockers::light_along(st, ws, x, to, opened, inside.as_ref(), weight, out)
         } else {
             1.0
         };
@@ -190,7 +204,7 @@ impl<V: Visibility + ?Sized> Ray<'_, V> {
                 }
             }
             Some(_) => {}
-            None => ray.gather_beyond(x, d, w, reflected, out),
+            None => ray.gather_beyond(x, d, w, reflected, inside.as_ref().or(inner), out),
         }
     }
 }
