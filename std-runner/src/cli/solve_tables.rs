@@ -27,7 +27,7 @@ pub(super) fn complete(
                     .map(|&o| scene.originals[o].name.as_str())
                     .collect();
                 eprintln!(
-                    "note: {} has no directional tables for {}: taking them from the table cache or making them now (minutes per original at the defaults; `hirad tables SCENE -o OUT.hirb` keeps them in a file)",
+                    "note: {} has no directional tables for {}: taking them from the table cache or making them now (minutes for an original of a few thousand polygons at the defaults, hours for tens of thousands; `hirad tables SCENE -o OUT.hirb` keeps them in a file)",
                     a.scene.display(),
                     names.join(", ")
                 );

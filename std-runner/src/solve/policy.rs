@@ -22,6 +22,18 @@ use std::str::FromStr;
 /// 22 s at the tables' epsilon, and its bake needs 80 to 1,000 of them.
 pub const AUTO_BAKE_POLYGONS: u64 = 8_000;
 
+/// What a policy that closes an original without tables in the scene adds to its reason
+/// when the bake before the solve will take long (more than [`AUTO_BAKE_POLYGONS`]).
+fn long_bake(closed: bool, has_tables: bool, polygons: u64) -> String {
+    if closed && !has_tables && polygons > AUTO_BAKE_POLYGONS {
+        format!(
+            "; no tables in the scene: baking {polygons} polygons before the solve takes long (hours at the defaults; `hirad tables --max-side N` bakes coarser ones)"
+        )
+    } else {
+        String::new()
+    }
+}
+
 /// Originals with fewer polygons than this once expanded are expanded in place by `auto`,
 /// tables or not: a level of its own costs a load, a census, links copied, a solve and a
 /// gather for a handful of polygons, and as a closed leaf in its parent it costs about as
@@ -322,15 +334,19 @@ pub fn decide<S: SceneSource>(view: &SceneView<S>, policy: Policy) -> Result<Dec
         let has_tables = view.table_of(OriginalId(k as u32)).map_err(err)?.is_some();
         let (polygons, depth, emits) = (rec.expanded_polygons, f.depth[k], f.emits[k]);
         let (closed, why) = match policy {
-            Policy::All => (true, "all".to_string()),
+            Policy::All => (
+                true,
+                format!("all{}", long_bake(true, has_tables, polygons)),
+            ),
             Policy::None => (false, "none".to_string()),
             Policy::Every(m) => {
                 let closed = depth >= 1 && (depth - 1) % m == 0;
                 (
                     closed,
                     format!(
-                        "every:{m}: depth {depth} is {}a level of instances",
-                        if closed { "" } else { "not " }
+                        "every:{m}: depth {depth} is {}a level of instances{}",
+                        if closed { "" } else { "not " },
+                        long_bake(closed, has_tables, polygons)
                     ),
                 )
             }
@@ -424,6 +440,19 @@ mod tests {
                 hi,
                 "{originals:?}"
             );
+        }
+    }
+
+    #[test]
+    fn a_policy_that_closes_a_large_original_without_tables_says_the_bake_is_long() {
+        let big = AUTO_BAKE_POLYGONS + 1;
+        assert!(long_bake(true, false, big).contains("takes long"));
+        for (closed, has_tables, polygons) in [
+            (false, false, big),
+            (true, true, big),
+            (true, false, AUTO_BAKE_POLYGONS),
+        ] {
+            assert_eq!(long_bake(closed, has_tables, polygons), "");
         }
     }
 
