@@ -236,8 +236,12 @@ pub(crate) fn light_along(
             let near = own.is_none()
                 && q != NONE
                 && local.is_some_and(|l| {
-                    // Inside an opened instance's own box only.
+                    // Inside an opened instance's own box only (tested before the
+                    // polygon's geometry is looked up).
                     let x = from + (to - from) * at;
+                    if !l.any_holds(x) {
+                        return false;
+                    }
                     let Some(g) = st.original_geometry(ws, st.instance(ws, i).slot) else {
                         return false;
                     };

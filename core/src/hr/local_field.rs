@@ -220,6 +220,12 @@ impl Inside<'_> {
         p.cmpge(self.lo).all() && p.cmple(self.hi).all()
     }
 
+    /// Whether any opened box of the chain holds `x` (world, m): the cheap test before a
+    /// polygon's class is looked up.
+    pub(crate) fn any_holds(&self, x: Vec3) -> bool {
+        self.holds(x) || self.inner.is_some_and(|i| i.any_holds(x))
+    }
+
     /// The mean reflected radiosity of the class around `x` (W/m^2 per band, into `out`)
     /// in the innermost opened level whose box holds `x` and whose field knows it.
     pub(crate) fn radiosity(&self, x: Vec3, two_sided: bool, out: &mut [f32]) -> Around {
