@@ -187,6 +187,73 @@ fn every_n_and_auto_from_the_command_line() {
     assert!(bad.contains("every:N"), "{bad}");
 }
 
+#[test]
+fn expand_opens_named_originals_in_their_parents_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = plant_image(dir.path());
+    let image = dir.path().join("plant_tables.hirb");
+    std::fs::write(&image, &bytes).unwrap();
+    let run = |policy: &str, extra: &[&str], name: &str| {
+        let stats = dir.path().join(format!("{name}.json"));
+        let results = dir.path().join(format!("{name}.csv"));
+        let mut args = vec![
+            "solve",
+            s(&image),
+            "--method",
+            "hi",
+            "--instancing",
+            policy,
+            "--stats",
+            s(&stats),
+            "--results",
+            s(&results),
+        ];
+        args.extend_from_slice(extra);
+        let out = hirad(&args);
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        (
+            String::from_utf8_lossy(&out.stderr).to_string(),
+            v,
+            std::fs::read(&results).unwrap(),
+        )
+    };
+    // `all` with the twigs named: the same as every:2 (branches closed, twigs in them).
+    let (err, v, named) = run("all", &["--expand", "twig"], "named");
+    assert!(
+        err.contains("twig: expanded in place") && err.contains("--expand names it"),
+        "{err}"
+    );
+    assert!(err.contains("branch: closed"), "{err}");
+    assert_eq!(v["levels"]["solved"], 6, "{v}");
+    assert_eq!(v["levels"]["closed_instances"], 5, "{v}");
+    let (_, _, every2) = run("every:2", &[], "every2");
+    assert!(named == every2, "--expand twig and every:2 differ");
+    // Both named (repeated or by commas): one level, hr's.
+    for extra in [
+        &["--expand", "twig,branch"][..],
+        &["--expand", "branch", "--expand", "twig"][..],
+    ] {
+        let (_, v, _) = run("all", extra, "both");
+        assert_eq!(v["levels"]["solved"], 1, "{extra:?}: {v}");
+        assert_eq!(v["levels"]["closed_instances"], 0, "{extra:?}: {v}");
+    }
+    // A name the scene does not have: a usage error that lists those it has.
+    let bad = fails_with(
+        2,
+        &["solve", s(&image), "--method", "hi", "--expand", "trunk"],
+    );
+    assert!(
+        bad.contains("--expand trunk") && bad.contains("twig, branch"),
+        "{bad}"
+    );
+}
+
 /// Faces of a box of `side` m standing on the origin, outwards, each cut into n x n quads.
 fn box_quads(t: &mut String, material: &str, side: f64, n: usize) {
     let h = side / 2.0;

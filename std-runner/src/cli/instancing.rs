@@ -9,21 +9,35 @@ use anyhow::{Result, anyhow};
 use hirad_core::image::{SceneSource, SceneView};
 use std::path::Path;
 
-/// `policy` applied to the image `view` of the scene file `path` (errors name the file).
+/// `policy` applied to the image `view` of the scene file `path`, the originals named in
+/// `expand` expanded in place (errors name the file; an unknown name is a usage error).
 pub(super) fn decide<S: SceneSource>(
     path: &Path,
     view: &SceneView<S>,
     policy: Policy,
+    expand: &[String],
 ) -> Result<Decision> {
-    policy::decide(view, policy).map_err(|e| input(anyhow!("{}: {e}", path.display())))
+    policy::decide(view, policy, expand).map_err(|e| {
+        let e = anyhow!("{}: {e}", path.display());
+        if e.to_string().contains("--expand ") {
+            usage(e)
+        } else {
+            input(e)
+        }
+    })
 }
 
-/// `policy` applied to `scene`, the model loaded from `path`.
-pub(super) fn decide_model(path: &Path, scene: &Scene, policy: Policy) -> Result<Decision> {
+/// `policy` applied to `scene`, the model loaded from `path` (see [`decide`]).
+pub(super) fn decide_model(
+    path: &Path,
+    scene: &Scene,
+    policy: Policy,
+    expand: &[String],
+) -> Result<Decision> {
     let bytes = files::compile(path, scene)?;
     let view =
         crate::scene::read_image(&bytes).map_err(|e| input(anyhow!("{}: {e}", path.display())))?;
-    decide(path, &view, policy)
+    decide(path, &view, policy, expand)
 }
 
 /// Prints what `d` chose for each instanced original, unless `quiet`.

@@ -65,6 +65,7 @@ pub fn run(a: Args) -> Result<()> {
             &a.scene,
             &files::open_image(&a.scene)?,
             p,
+            &a.expand,
         )?),
         _ => None,
     };
@@ -101,7 +102,12 @@ pub fn run(a: Args) -> Result<()> {
     if let (Some(p), None, Some(Method::Hi) | None) = (policy, &decision, method)
         && !loaded.scene.originals.is_empty()
     {
-        decision = Some(instancing::decide_model(&a.scene, &loaded.scene, p)?);
+        decision = Some(instancing::decide_model(
+            &a.scene,
+            &loaded.scene,
+            p,
+            &a.expand,
+        )?);
     }
     let method = method.get_or_insert(if hi_by_default(&decision) {
         Method::Hi

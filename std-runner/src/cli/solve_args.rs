@@ -50,6 +50,13 @@ pub struct Args {
     /// identical). Default: `auto` with `--method hi`.
     #[arg(long)]
     pub instancing: Option<Policy>,
+    /// Originals `--method hi` expands in place whatever `--instancing` says (repeatable, or
+    /// names separated by commas): their contents join their parent's level, their own
+    /// instances closed there. For originals whose instances' boxes their siblings' polygons
+    /// fill (the printout says so): tables measured on an original alone count the light
+    /// between such neighbours twice.
+    #[arg(long, value_name = "NAME", value_delimiter = ',')]
+    pub expand: Vec<String>,
     /// Largest side of every direction grid of the tables `--method hi` makes for originals
     /// the scene has none for (4 to 128; default: those of `hirad tables`): coarser tables,
     /// made faster. Tables come from the table cache when it holds them.

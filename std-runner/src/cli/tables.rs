@@ -72,6 +72,15 @@ pub struct Args {
     /// tables for; `every:N`: those at instancing depths 1, N + 1, ...).
     #[arg(long, conflicts_with = "originals")]
     pub instancing: Option<Policy>,
+    /// Without `--original`: originals expanded in place whatever `--instancing` says, as
+    /// `hirad solve --expand` (no tables made for them).
+    #[arg(
+        long,
+        value_name = "NAME",
+        value_delimiter = ',',
+        conflicts_with = "originals"
+    )]
+    pub expand: Vec<String>,
     /// Largest side of the grid of outgoing directions (side x side suns, one solve each).
     #[arg(long, default_value_t = 32)]
     pub max_out_side: u32,
@@ -168,6 +177,7 @@ pub fn run(a: Args) -> Result<()> {
             &a.scene,
             &scene,
             a.instancing.unwrap_or(Policy::Auto),
+            &a.expand,
         )?;
         super::instancing::print(&d, a.quiet);
         Some(d.closed().collect())

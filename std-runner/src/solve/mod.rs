@@ -3,6 +3,7 @@
 
 mod counted;
 mod executor;
+mod overlap;
 pub mod policy;
 #[cfg(test)]
 mod tests_adapter;

@@ -41,6 +41,10 @@ fn long_bake(closed: bool, has_tables: bool, polygons: u64) -> String {
 /// instances in the paper stand: that many levels, against about 15,000 without them).
 pub const AUTO_LEVEL_POLYGONS: u64 = 64;
 
+/// Polygon area of its siblings inside a closed instance's box, over its own (mean over an
+/// original's instances, see `overlap`), above which the printout says so.
+pub const OVERLAP_NOTED: f32 = 1.0;
+
 /// `--instancing`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Policy {
@@ -108,6 +112,9 @@ pub struct Choice {
     pub has_tables: bool,
     /// Closed (true) or expanded in place.
     pub closed: bool,
+    /// Where closed: its siblings' polygon area inside its instances' boxes over its own
+    /// (mean over its instances, see `overlap`).
+    pub overlap: Option<f32>,
     /// Why, in a few words.
     pub why: String,
 }
@@ -312,8 +319,14 @@ fn facts<S: SceneSource>(view: &SceneView<S>) -> Result<Facts> {
     })
 }
 
-/// Applies `policy` to the scene of `view` (for [`Policy::None`], every original expanded).
-pub fn decide<S: SceneSource>(view: &SceneView<S>, policy: Policy) -> Result<Decision> {
+/// Applies `policy` to the scene of `view` (for [`Policy::None`], every original expanded),
+/// with the originals named in `expand` expanded in place whatever it says (an unknown
+/// name is an error that lists the scene's originals).
+pub fn decide<S: SceneSource>(
+    view: &SceneView<S>,
+    policy: Policy,
+    expand: &[String],
+) -> Result<Decision> {
     let info = *view.info();
     let n = info.originals as usize;
     let f = facts(view)?;
@@ -372,9 +385,6 @@ pub fn decide<S: SceneSource>(view: &SceneView<S>, policy: Policy) -> Result<Dec
                 format!("no tables in the scene yet; {polygons} polygons bake in minutes"),
             ),
         };
-        if !closed {
-            inline[k / 8] |= 1 << (k % 8);
-        }
         originals.push(Choice {
             name,
             instances: f.instances[k],
@@ -383,14 +393,67 @@ pub fn decide<S: SceneSource>(view: &SceneView<S>, policy: Policy) -> Result<Dec
             emits,
             has_tables,
             closed,
+            overlap: None,
             why,
         });
+    }
+    if let Some(name) = expand
+        .iter()
+        .find(|n| !originals.iter().any(|c| &c.name == *n))
+    {
+        let names: Vec<&str> = originals.iter().map(|c| c.name.as_str()).collect();
+        bail!(
+            "--expand {name}: the scene has no original of that name (it has: {})",
+            if names.is_empty() {
+                "none".to_string()
+            } else {
+                names.join(", ")
+            }
+        );
+    }
+    for c in originals.iter_mut() {
+        if c.closed && expand.contains(&c.name) {
+            c.closed = false;
+            c.why = "--expand names it".to_string();
+        }
+    }
+    note_overlap(view, &mut originals)?;
+    for (k, c) in originals.iter().enumerate() {
+        if !c.closed {
+            inline[k / 8] |= 1 << (k % 8);
+        }
     }
     Ok(Decision {
         policy,
         inline,
         originals,
     })
+}
+
+/// Notes, for every closed original, how much of its instances' boxes their siblings'
+/// polygons fill (see `overlap`): where they fill much, its tables (measured on it alone)
+/// stand in for contents whose light mixes with its neighbours', and `--expand` may serve.
+fn note_overlap<S: SceneSource>(view: &SceneView<S>, originals: &mut [Choice]) -> Result<()> {
+    if !originals.iter().any(|c| c.closed && c.instances > 0) {
+        return Ok(());
+    }
+    let closed: Vec<bool> = originals
+        .iter()
+        .map(|c| c.closed && c.instances > 0)
+        .collect();
+    let shares = super::overlap::overlaps(view, &closed)?;
+    for (c, share) in originals.iter_mut().zip(shares) {
+        if let (true, Some(share)) = (c.closed, share) {
+            c.overlap = Some(share);
+            if share > OVERLAP_NOTED {
+                c.why.push_str(&format!(
+                    "; its siblings' polygons inside its box hold {:.1} times its own area (their light mixes; --expand {} opens them together)",
+                    share, c.name
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -414,6 +477,7 @@ mod tests {
             emits: false,
             has_tables,
             closed,
+            overlap: None,
             why: String::new(),
         };
         let decision = |originals: Vec<Choice>| Decision {
@@ -481,7 +545,7 @@ mod tests {
         let bytes = plant();
         let view = crate::scene::read_image(&bytes).unwrap();
         let closed = |p: Policy| -> Vec<(String, bool, u32, u64)> {
-            decide(&view, p)
+            decide(&view, p, &[])
                 .unwrap()
                 .originals
                 .into_iter()
@@ -495,11 +559,19 @@ mod tests {
             ]
         };
         assert_eq!(closed(Policy::All), both(true, true));
+        // Closed, each has its siblings' share noted; expanded, none.
+        let all = decide(&view, Policy::All, &[]).unwrap();
+        for c in &all.originals {
+            let f = c.overlap.expect("a closed original's share");
+            assert!(f.is_finite() && f >= 0.0, "{c:?}");
+        }
+        let none = decide(&view, Policy::None, &[]).unwrap();
+        assert!(none.originals.iter().all(|c| c.overlap.is_none()));
         assert_eq!(closed(Policy::Every(1)), both(true, true));
         assert_eq!(closed(Policy::Every(2)), both(false, true));
         assert_eq!(closed(Policy::None), both(false, false));
         // Both fewer than 64 polygons expanded: auto expands them in place.
-        let auto = decide(&view, Policy::Auto).unwrap();
+        let auto = decide(&view, Policy::Auto, &[]).unwrap();
         assert!(
             auto.originals
                 .iter()
@@ -510,7 +582,7 @@ mod tests {
         assert!(auto.closed_emitter().is_none());
         assert_eq!(auto.closed().count(), 0);
         // The bits for the core: set where expanded in place.
-        let every2 = decide(&view, Policy::Every(2)).unwrap();
+        let every2 = decide(&view, Policy::Every(2), &[]).unwrap();
         assert!(every2.inline().expands(0) && !every2.inline().expands(1));
         assert_eq!(every2.closed().collect::<Vec<_>>(), vec![1]);
         let text = every2.describe();
