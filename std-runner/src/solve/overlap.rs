@@ -229,6 +229,10 @@ const MEASURED: usize = 4096;
 /// neighbour is tested, standing for k.
 const TESTS_PER_ENTRY: usize = 1 << 14;
 
+// The test of sparser samples puts 299 neighbours of 64 points each between one and two
+// entries' worth.
+const _: () = assert!(299 * 64 > TESTS_PER_ENTRY && 299 * 64 <= 2 * TESTS_PER_ENTRY);
+
 /// Per entry, the polygon area of the other entries inside its box over its own (from
 /// each original's `samples`); `None` for entries not measured (see [`MEASURED`]).
 fn shared(level: &[Entry], samples: &[Samples]) -> Vec<Option<f32>> {
@@ -419,7 +423,6 @@ mod tests {
         // 300 boxes in one place: more neighbours' points than one entry may test; every
         // other one is tested, standing for two, and the sum is the same.
         let heap: Vec<Entry> = (0..300).map(|_| entry(0, Vec3::ZERO, id, 1.0)).collect();
-        assert!(299 * 64 > TESTS_PER_ENTRY && 299 * 64 <= 2 * TESTS_PER_ENTRY);
         let f = shared(&heap, &s);
         assert!(f.iter().all(|x| x == &Some(299.0)), "{:?}", &f[..4]);
     }
