@@ -1,0 +1,182 @@
+//! A scene image opened from the caller's bytes (copied: the caller may free its buffer at
+//! once), checked whole when opened.
+
+use crate::status::{HiradStatus, guarded};
+use hirad_core::image::{SceneSource, SceneView, SourceError};
+use std::ffi::{CString, c_char};
+
+/// The bytes of an image, owned by its handle.
+struct Owned(Box<[u8]>);
+
+impl SceneSource for Owned {
+    fn len(&self) -> u64 {
+        self.0.len() as u64
+    }
+
+    fn read_at(&self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
+        hirad_core::image::SliceSource(&self.0).read_at(offset, buf)
+    }
+}
+
+/// An opened scene, or the reason it could not be opened (opaque to C).
+pub struct HiradScene {
+    view: Option<SceneView<Owned>>,
+    /// The last failure's message ("" after a success), NUL-terminated.
+    message: CString,
+    /// Byte offset of the image fault, or `u64::MAX` where none applies.
+    offset: u64,
+}
+
+/// What an opened scene holds (counts of the image's records).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HiradSceneInfo {
+    /// Spectral bands (1 to 8).
+    pub bands: u32,
+    /// Polygons stored in the image.
+    pub polygons: u32,
+    /// Polygons once every instance is expanded: the rows of a solve's results.
+    pub expanded_polygons: u64,
+    /// Originals (shared subtrees that instances place).
+    pub originals: u32,
+    /// Instances stored (exact and approximate).
+    pub instances: u32,
+    /// Most instances nested along one path.
+    pub instancing_depth: u32,
+    /// Directional suns.
+    pub suns: u32,
+    /// Sky directions.
+    pub sky: u32,
+    /// Materials.
+    pub materials: u32,
+}
+
+fn message(text: &str) -> CString {
+    CString::new(text.replace('\0', " ")).unwrap_or_default()
+}
+
+/// Opens the scene image in `bytes[0..len]` (copied) into a new handle at `*out`. The
+/// handle is made even when the image is not valid (status `HIRAD_INVALID_SCENE`): its
+/// message and byte offset say what is wrong, and it must be freed as any other. `out`
+/// is left untouched where the status is `HIRAD_NULL_ARGUMENT` or `HIRAD_OUT_OF_MEMORY`.
+///
+/// # Safety
+/// `bytes` must point to `len` readable bytes (or be anything when `len` is 0); `out` must
+/// be null or point to writable storage for one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hirad_scene_open_memory(
+    bytes: *const u8,
+    len: usize,
+    out: *mut *mut HiradScene,
+) -> HiradStatus {
+    guarded(|| {
+        if out.is_null() || (bytes.is_null() && len > 0) {
+            return HiradStatus::NullArgument;
+        }
+        let copy: Box<[u8]> = if len == 0 {
+            Box::default()
+        } else {
+            // SAFETY: the caller promises `len` readable bytes at `bytes` (non-null here).
+            let src = unsafe { std::slice::from_raw_parts(bytes, len) };
+            let mut v = Vec::new();
+            if v.try_reserve_exact(len).is_err() {
+                return HiradStatus::OutOfMemory;
+            }
+            v.extend_from_slice(src);
+            v.into_boxed_slice()
+        };
+        let (scene, status) = match SceneView::open(Owned(copy)) {
+            Ok(view) => (
+                HiradScene {
+                    view: Some(view),
+                    message: CString::default(),
+                    offset: u64::MAX,
+                },
+                HiradStatus::Ok,
+            ),
+            Err(e) => (
+                HiradScene {
+                    view: None,
+                    message: message(&format!("byte {}: {}", e.offset, e.kind)),
+                    offset: e.offset,
+                },
+                HiradStatus::InvalidScene,
+            ),
+        };
+        // SAFETY: `out` is non-null and the caller promises it is writable.
+        unsafe { *out = Box::into_raw(Box::new(scene)) };
+        status
+    })
+}
+
+/// Frees a handle made by [`hirad_scene_open_memory`] (null: nothing).
+///
+/// # Safety
+/// `scene` must be null or a handle not freed before.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hirad_scene_free(scene: *mut HiradScene) {
+    if !scene.is_null() {
+        // SAFETY: made by `Box::into_raw` in `hirad_scene_open_memory`, not freed before.
+        let _ = std::panic::catch_unwind(|| drop(unsafe { Box::from_raw(scene) }));
+    }
+}
+
+/// The handle's last failure as text ("" when there is none; a static "" for a null
+/// handle), valid until the handle's next call or its free.
+///
+/// # Safety
+/// `scene` must be null or a live handle.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hirad_scene_message(scene: *const HiradScene) -> *const c_char {
+    // SAFETY: null or a live handle, by the caller's promise.
+    match unsafe { scene.as_ref() } {
+        Some(s) => s.message.as_ptr(),
+        None => c"".as_ptr(),
+    }
+}
+
+/// The byte offset of the image fault that made opening fail, or `UINT64_MAX` where none
+/// applies (an open scene, a null handle).
+///
+/// # Safety
+/// `scene` must be null or a live handle.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hirad_scene_error_offset(scene: *const HiradScene) -> u64 {
+    // SAFETY: null or a live handle, by the caller's promise.
+    unsafe { scene.as_ref() }.map_or(u64::MAX, |s| s.offset)
+}
+
+/// Writes what the opened scene holds to `*info`.
+///
+/// # Safety
+/// `scene` must be null or a live handle; `info` null or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hirad_scene_info(
+    scene: *const HiradScene,
+    info: *mut HiradSceneInfo,
+) -> HiradStatus {
+    guarded(|| {
+        // SAFETY: null or a live handle, by the caller's promise.
+        let (Some(s), false) = (unsafe { scene.as_ref() }, info.is_null()) else {
+            return HiradStatus::NullArgument;
+        };
+        let Some(view) = &s.view else {
+            return HiradStatus::NotOpen;
+        };
+        let i = view.info();
+        let out = HiradSceneInfo {
+            bands: i.bands,
+            polygons: i.polygons,
+            expanded_polygons: i.expanded_polygons,
+            originals: i.originals,
+            instances: i.exact_instances.saturating_add(i.approximate_instances),
+            instancing_depth: i.instancing_depth,
+            suns: i.suns,
+            sky: i.sky,
+            materials: i.materials,
+        };
+        // SAFETY: `info` is non-null and the caller promises it is writable.
+        unsafe { info.write(out) };
+        HiradStatus::Ok
+    })
+}
