@@ -3,6 +3,8 @@
 //! a [`HiradStatus`]; a handle keeps the message of its last failure
 //! ([`hirad_scene_message`]). No panic crosses the boundary: one caught is
 //! [`HiradStatus::Internal`]. Null pointers are status codes, never undefined behaviour.
+//! The C header is `include/hirad.h`, made by cbindgen (`cbindgen.toml`); CI fails when the
+//! committed one differs from what the sources make.
 //!
 //! Ownership: a handle made by `hirad_*_open*` is the caller's until it passes it to its
 //! `*_free`; strings a handle returns live as long as the handle and its next call.

@@ -56,9 +56,10 @@ fn message(text: &str) -> CString {
 }
 
 /// Opens the scene image in `bytes[0..len]` (copied) into a new handle at `*out`. The
-/// handle is made even when the image is not valid (status `HIRAD_INVALID_SCENE`): its
+/// handle is made even when the image is not valid (status `HIRAD_STATUS_INVALID_SCENE`): its
 /// message and byte offset say what is wrong, and it must be freed as any other. `out`
-/// is left untouched where the status is `HIRAD_NULL_ARGUMENT` or `HIRAD_OUT_OF_MEMORY`.
+/// is left untouched where the status is `HIRAD_STATUS_NULL_ARGUMENT` or
+/// `HIRAD_STATUS_OUT_OF_MEMORY`.
 ///
 /// # Safety
 /// `bytes` must point to `len` readable bytes (or be anything when `len` is 0); `out` must
@@ -109,7 +110,7 @@ pub unsafe extern "C" fn hirad_scene_open_memory(
     })
 }
 
-/// Frees a handle made by [`hirad_scene_open_memory`] (null: nothing).
+/// Frees a handle made by `hirad_scene_open_memory` (null: nothing).
 ///
 /// # Safety
 /// `scene` must be null or a handle not freed before.

@@ -1,6 +1,6 @@
 //! The status every C function returns.
 
-/// What a call did: `HIRAD_OK` (0) or why it did not.
+/// What a call did: `HIRAD_STATUS_OK` (0) or why it did not.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HiradStatus {
@@ -9,7 +9,7 @@ pub enum HiradStatus {
     /// A pointer the call needs was null.
     NullArgument = 1,
     /// The bytes are not a valid scene image (the handle's message says what is wrong and
-    /// [`crate::hirad_scene_error_offset`] at which byte).
+    /// `hirad_scene_error_offset` at which byte).
     InvalidScene = 2,
     /// The handle holds no usable scene (its opening failed).
     NotOpen = 3,
