@@ -29,6 +29,11 @@ typedef enum HiradStatus {
 // An opened scene, or the reason it could not be opened (opaque to C).
 typedef struct HiradScene HiradScene;
 
+// Reads `len` bytes of the scene image at byte `offset` into `buf`: 0 when done, any other
+// value an error code of the caller's (reported in the message). Several threads of one
+// solve may call it at once with the same `user`.
+typedef int32_t (*HiradReadFn)(void *user, uint64_t offset, uint8_t *buf, size_t len);
+
 // What an opened scene holds (counts of the image's records).
 typedef struct HiradSceneInfo {
   // Spectral bands (1 to 8).
@@ -66,7 +71,22 @@ extern "C" {
 // be null or point to writable storage for one pointer.
 enum HiradStatus hirad_scene_open_memory(const uint8_t *bytes, size_t len, struct HiradScene **out);
 
-// Frees a handle made by `hirad_scene_open_memory` (null: nothing).
+// Opens the scene image that `read` gives (`len` bytes; see `HiradReadFn`) into a new
+// handle at `*out`, as `hirad_scene_open_memory` does; the whole image is read and checked
+// now, and read again while solving: `user` and what it reads must outlive the handle. A
+// read that fails makes the status `HIRAD_STATUS_INVALID_SCENE`, its code and byte offset
+// in the handle's message.
+//
+// # Safety
+// `read` must be null or a function that writes `len` bytes at `buf` (or returns non-zero)
+// and may be called from several threads at once; `out` null or writable.
+enum HiradStatus hirad_scene_open_reader(HiradReadFn read,
+                                         void *user,
+                                         uint64_t len,
+                                         struct HiradScene **out);
+
+// Frees a handle made by `hirad_scene_open_memory` or `hirad_scene_open_reader` (null:
+// nothing).
 //
 // # Safety
 // `scene` must be null or a handle not freed before.

@@ -1,4 +1,4 @@
-//! hirad's C ABI (issue 19): scenes opened from a caller's bytes, with the image's
+//! hirad's C ABI (issue 19): scenes opened from a caller's bytes or read function, with the image's
 //! validation errors and their byte offsets, behind opaque handles. Every function returns
 //! a [`HiradStatus`]; a handle keeps the message of its last failure
 //! ([`hirad_scene_message`]). No panic crosses the boundary: one caught is
@@ -13,7 +13,7 @@ mod scene;
 mod status;
 
 pub use scene::{
-    HiradScene, HiradSceneInfo, hirad_scene_error_offset, hirad_scene_free, hirad_scene_info,
-    hirad_scene_message, hirad_scene_open_memory,
+    HiradReadFn, HiradScene, HiradSceneInfo, hirad_scene_error_offset, hirad_scene_free,
+    hirad_scene_info, hirad_scene_message, hirad_scene_open_memory, hirad_scene_open_reader,
 };
 pub use status::HiradStatus;

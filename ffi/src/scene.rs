@@ -1,26 +1,61 @@
 //! A scene image opened from the caller's bytes (copied: the caller may free its buffer at
-//! once), checked whole when opened.
+//! once) or from the caller's read function, checked whole when opened.
 
 use crate::status::{HiradStatus, guarded};
 use hirad_core::image::{SceneSource, SceneView, SourceError};
-use std::ffi::{CString, c_char};
+use std::ffi::{CString, c_char, c_void};
 
-/// The bytes of an image, owned by its handle.
-struct Owned(Box<[u8]>);
+/// Reads `len` bytes of the scene image at byte `offset` into `buf`: 0 when done, any other
+/// value an error code of the caller's (reported in the message). Several threads of one
+/// solve may call it at once with the same `user`.
+pub type HiradReadFn =
+    Option<unsafe extern "C" fn(user: *mut c_void, offset: u64, buf: *mut u8, len: usize) -> i32>;
 
-impl SceneSource for Owned {
+/// Where a handle's image bytes come from.
+enum Source {
+    /// A copy of the caller's buffer.
+    Owned(Box<[u8]>),
+    /// The caller's read function, its pointer and the image's length (bytes).
+    Reader {
+        read: unsafe extern "C" fn(*mut c_void, u64, *mut u8, usize) -> i32,
+        user: *mut c_void,
+        len: u64,
+    },
+}
+
+impl SceneSource for Source {
     fn len(&self) -> u64 {
-        self.0.len() as u64
+        match self {
+            Source::Owned(b) => b.len() as u64,
+            Source::Reader { len, .. } => *len,
+        }
     }
 
     fn read_at(&self, offset: u64, buf: &mut [u8]) -> Result<(), SourceError> {
-        hirad_core::image::SliceSource(&self.0).read_at(offset, buf)
+        match self {
+            Source::Owned(b) => hirad_core::image::SliceSource(b).read_at(offset, buf),
+            Source::Reader { read, user, len } => {
+                let end = offset.checked_add(buf.len() as u64);
+                if end.is_none_or(|e| e > *len) {
+                    return Err(SourceError::OutOfRange);
+                }
+                if buf.is_empty() {
+                    return Ok(());
+                }
+                // SAFETY: the caller of `hirad_scene_open_reader` promised a function that
+                // fills `len` bytes at `buf` (a live slice of that length here).
+                match unsafe { read(*user, offset, buf.as_mut_ptr(), buf.len()) } {
+                    0 => Ok(()),
+                    code => Err(SourceError::Io(code)),
+                }
+            }
+        }
     }
 }
 
 /// An opened scene, or the reason it could not be opened (opaque to C).
 pub struct HiradScene {
-    view: Option<SceneView<Owned>>,
+    view: Option<SceneView<Source>>,
     /// The last failure's message ("" after a success), NUL-terminated.
     message: CString,
     /// Byte offset of the image fault, or `u64::MAX` where none applies.
@@ -86,31 +121,67 @@ pub unsafe extern "C" fn hirad_scene_open_memory(
             v.extend_from_slice(src);
             v.into_boxed_slice()
         };
-        let (scene, status) = match SceneView::open(Owned(copy)) {
-            Ok(view) => (
-                HiradScene {
-                    view: Some(view),
-                    message: CString::default(),
-                    offset: u64::MAX,
-                },
-                HiradStatus::Ok,
-            ),
-            Err(e) => (
-                HiradScene {
-                    view: None,
-                    message: message(&format!("byte {}: {}", e.offset, e.kind)),
-                    offset: e.offset,
-                },
-                HiradStatus::InvalidScene,
-            ),
-        };
         // SAFETY: `out` is non-null and the caller promises it is writable.
-        unsafe { *out = Box::into_raw(Box::new(scene)) };
-        status
+        unsafe { opened(Source::Owned(copy), out) }
     })
 }
 
-/// Frees a handle made by `hirad_scene_open_memory` (null: nothing).
+/// Opens the scene image that `read` gives (`len` bytes; see `HiradReadFn`) into a new
+/// handle at `*out`, as `hirad_scene_open_memory` does; the whole image is read and checked
+/// now, and read again while solving: `user` and what it reads must outlive the handle. A
+/// read that fails makes the status `HIRAD_STATUS_INVALID_SCENE`, its code and byte offset
+/// in the handle's message.
+///
+/// # Safety
+/// `read` must be null or a function that writes `len` bytes at `buf` (or returns non-zero)
+/// and may be called from several threads at once; `out` null or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn hirad_scene_open_reader(
+    read: HiradReadFn,
+    user: *mut c_void,
+    len: u64,
+    out: *mut *mut HiradScene,
+) -> HiradStatus {
+    guarded(|| {
+        let (Some(read), false) = (read, out.is_null()) else {
+            return HiradStatus::NullArgument;
+        };
+        // SAFETY: `out` is non-null and the caller promises it is writable.
+        unsafe { opened(Source::Reader { read, user, len }, out) }
+    })
+}
+
+/// Checks `source` as a scene image and puts the handle (open, or holding why not) at
+/// `*out`.
+///
+/// # Safety
+/// `out` must be non-null and writable.
+unsafe fn opened(source: Source, out: *mut *mut HiradScene) -> HiradStatus {
+    let (scene, status) = match SceneView::open(source) {
+        Ok(view) => (
+            HiradScene {
+                view: Some(view),
+                message: CString::default(),
+                offset: u64::MAX,
+            },
+            HiradStatus::Ok,
+        ),
+        Err(e) => (
+            HiradScene {
+                view: None,
+                message: message(&format!("byte {}: {}", e.offset, e.kind)),
+                offset: e.offset,
+            },
+            HiradStatus::InvalidScene,
+        ),
+    };
+    // SAFETY: the caller's promise.
+    unsafe { *out = Box::into_raw(Box::new(scene)) };
+    status
+}
+
+/// Frees a handle made by `hirad_scene_open_memory` or `hirad_scene_open_reader` (null:
+/// nothing).
 ///
 /// # Safety
 /// `scene` must be null or a handle not freed before.

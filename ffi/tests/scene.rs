@@ -3,7 +3,7 @@
 //! the core's checked view reports; null pointers are status codes.
 
 use hirad_ffi::*;
-use std::ffi::CStr;
+use std::ffi::{CStr, c_void};
 use std::ptr;
 
 /// The small plant fixture compiled to an image.
@@ -132,4 +132,79 @@ fn null_pointers_are_status_codes() {
         assert_eq!(hirad_scene_error_offset(ptr::null()), u64::MAX);
         hirad_scene_free(ptr::null_mut());
     }
+}
+
+/// What the test reader reads from: the bytes, and the offset from which every read fails.
+struct Disk {
+    bytes: Vec<u8>,
+    fails_from: u64,
+}
+
+unsafe extern "C" fn read_disk(user: *mut c_void, offset: u64, buf: *mut u8, len: usize) -> i32 {
+    let disk = unsafe { &*(user as *const Disk) };
+    if offset + len as u64 > disk.fails_from {
+        return 5;
+    }
+    let from = offset as usize;
+    unsafe { std::ptr::copy_nonoverlapping(disk.bytes[from..from + len].as_ptr(), buf, len) };
+    0
+}
+
+fn open_reader(disk: &Disk, len: u64) -> (HiradStatus, *mut HiradScene) {
+    let mut scene: *mut HiradScene = ptr::null_mut();
+    let status = unsafe {
+        hirad_scene_open_reader(
+            Some(read_disk),
+            disk as *const Disk as *mut c_void,
+            len,
+            &mut scene,
+        )
+    };
+    (status, scene)
+}
+
+#[test]
+fn a_reader_opens_what_the_bytes_open_and_its_failures_are_reported() {
+    let bytes = plant();
+    let n = bytes.len() as u64;
+    let disk = Disk {
+        bytes: bytes.clone(),
+        fails_from: u64::MAX,
+    };
+    let (status, scene) = open_reader(&disk, n);
+    assert_eq!(status, HiradStatus::Ok, "{}", message(scene));
+    let (_, from_memory) = open(&bytes);
+    let (mut a, mut b) = (HiradSceneInfo::default(), HiradSceneInfo::default());
+    unsafe {
+        assert_eq!(hirad_scene_info(scene, &mut a), HiradStatus::Ok);
+        assert_eq!(hirad_scene_info(from_memory, &mut b), HiradStatus::Ok);
+        hirad_scene_free(scene);
+        hirad_scene_free(from_memory);
+    }
+    assert_eq!(a, b);
+    // A read that fails anywhere: the scene is refused with the reader's code and the byte
+    // of the record being read (reads go ahead by windows of records).
+    for fails_from in [0, 8, 64, n / 3, n / 2, n - 1] {
+        let disk = Disk {
+            bytes: bytes.clone(),
+            fails_from,
+        };
+        let (status, scene) = open_reader(&disk, n);
+        assert_eq!(status, HiradStatus::InvalidScene, "from {fails_from}");
+        let m = message(scene);
+        assert!(m.contains("error code 5"), "from {fails_from}: {m}");
+        assert!(unsafe { hirad_scene_error_offset(scene) } < n, "{m}");
+        unsafe { hirad_scene_free(scene) };
+    }
+    // A length other than the image's own: refused, never read past.
+    for len in [n - 1, n + 1, 10] {
+        let (status, scene) = open_reader(&disk, len);
+        assert_eq!(status, HiradStatus::InvalidScene, "length {len}");
+        unsafe { hirad_scene_free(scene) };
+    }
+    // No function: a null argument.
+    let mut scene: *mut HiradScene = ptr::null_mut();
+    let status = unsafe { hirad_scene_open_reader(None, ptr::null_mut(), n, &mut scene) };
+    assert_eq!(status, HiradStatus::NullArgument);
+    assert!(scene.is_null());
 }
