@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every fuzz target for SECONDS seconds (default 60), seeded from fixtures/.
 # Usage: fuzz/run.sh [SECONDS [TARGET...]] (targets: binary_view text_parse obj_import
-# results_read; all by
+# results_read c_api; all by
 # default). Needs cargo-fuzz (`cargo install cargo-fuzz --locked`).
 # Prints each target's execution count; exits non-zero on the first finding (the crashing
 # input is left in fuzz/artifacts/TARGET/).
@@ -9,7 +9,7 @@ set -euo pipefail
 SECONDS_PER_TARGET="${1:-60}"
 shift || true
 TARGETS=("$@")
-[ "${#TARGETS[@]}" -gt 0 ] || TARGETS=(binary_view text_parse obj_import results_read)
+[ "${#TARGETS[@]}" -gt 0 ] || TARGETS=(binary_view text_parse obj_import results_read c_api)
 cd "$(dirname "$0")"
 ROOT="$(cd .. && pwd)"
 
@@ -33,6 +33,18 @@ seed() {
       (cd "$ROOT" && cargo build --release -q -p hirad)
       for f in "$ROOT"/fixtures/*.hir; do
         "$ROOT/target/release/hirad" solve -q "$f" --epsilon 1e-2 --results "corpus/$target/$(basename "${f%.hir}").csv" || true
+      done ;;
+    c_api)
+      # A mode byte (0: from memory, 1: through a reader), then an image.
+      (cd "$ROOT" && cargo build --release -q -p hirad)
+      for f in "$ROOT"/fixtures/*.hir; do
+        local image
+        image="$(mktemp)"
+        "$ROOT/target/release/hirad" convert -q "$f" -o "$image.hirb"
+        for mode in 0 1; do
+          { printf "\\x0$mode"; cat "$image.hirb"; } > "corpus/$target/$(basename "${f%.hir}")_$mode.seed"
+        done
+        rm -f "$image" "$image.hirb"
       done ;;
     binary_view)
       (cd "$ROOT" && cargo build --release -q -p hirad)
