@@ -9,25 +9,94 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-// What a call did: `HIRAD_STATUS_OK` (0) or why it did not.
+// `HiradSettings::method`: as `hirad solve` without `--method`: hierarchical
+// instantiation where the instancing policy closes an original whose tables the scene
+// carries (or whose instances are too many to expand), else hierarchical radiosity.
+#define HIRAD_METHOD_AUTO 0
+
+// `HiradSettings::method`: hierarchical radiosity over the expanded scene.
+#define HIRAD_METHOD_HR 1
+
+// `HiradSettings::method`: hierarchical instantiation, level by level.
+#define HIRAD_METHOD_HI 2
+
+// `HiradSettings::instancing`: closed unless tables cannot stand for the original
+// (`--instancing auto`).
+#define HIRAD_INSTANCING_AUTO 0
+
+// `HiradSettings::instancing`: every instance closed, opened in turn (`all`).
+#define HIRAD_INSTANCING_ALL 1
+
+// `HiradSettings::instancing`: the instances at instancing depths 1, N + 1, 2N + 1, ...
+// closed, N = `instancing_every` (`every:N`).
+#define HIRAD_INSTANCING_EVERY 2
+
+// `HiradSettings::instancing`: every instance expanded (`none`: hierarchical radiosity).
+#define HIRAD_INSTANCING_NONE 3
+
+// `HiradSettings::final_rays` and `final_passes`: chosen from the scene.
+#define HIRAD_AUTO UINT32_MAX
+
+// Most spectral bands: the length of the per-band arrays of `HiradStats`.
+#define HIRAD_MAX_BANDS 8
+
+// What a call did: `HIRAD_STATUS_OK` (0) or why it did not. A handle's message
+// (`hirad_scene_message`) says more after any status but OK.
 typedef enum HiradStatus {
   // Done.
   HIRAD_STATUS_OK = 0,
   // A pointer the call needs was null.
   HIRAD_STATUS_NULL_ARGUMENT = 1,
   // The bytes are not a valid scene image (the handle's message says what is wrong and
-  // `hirad_scene_error_offset` at which byte).
+  // `hirad_scene_error_offset` at which byte), or the scene cannot be solved as it is
+  // (nothing emits light, no polygons, a polygon unusable once placed).
   HIRAD_STATUS_INVALID_SCENE = 2,
   // The handle holds no usable scene (its opening failed).
   HIRAD_STATUS_NOT_OPEN = 3,
-  // Memory for the handle could not be had.
+  // Memory outside the workspace (the handle, tables being made, names) could not be had.
   HIRAD_STATUS_OUT_OF_MEMORY = 4,
   // A panic inside hirad was caught: a bug, reported rather than crossing the boundary.
   HIRAD_STATUS_INTERNAL = 5,
+  // A field of `HiradSettings` is out of range, or the settings ask for something the
+  // method cannot do (the message names the field).
+  HIRAD_STATUS_INVALID_SETTINGS = 6,
+  // The workspace is below the least the plan gives (the message says how many bytes
+  // it needs), or a level found too little room in it while solving.
+  HIRAD_STATUS_WORKSPACE_TOO_SMALL = 7,
+  // A pointer to a struct is not aligned for it.
+  HIRAD_STATUS_MISALIGNED = 8,
+  // The progress callback asked to stop: no further polygon was handed to the sink.
+  HIRAD_STATUS_CANCELLED = 9,
+  // The polygon callback returned non-zero: the solve stopped there (its code is in the
+  // message).
+  HIRAD_STATUS_SINK_FAILED = 10,
+  // The solve finished and every polygon was handed over, but the numbers are not what
+  // was asked: the solution did not converge within `max_iterations`, or a band's power
+  // balance is off by more than `max_imbalance_percent` (the message says which; the
+  // stats hold the figures).
+  HIRAD_STATUS_NOT_RIGHT = 11,
+  // The scene lacks directional tables for originals hierarchical instantiation would
+  // close, and `make_tables` is 0 (the message names them).
+  HIRAD_STATUS_NO_TABLES = 12,
+  // Making an original's directional tables failed (the message says why).
+  HIRAD_STATUS_TABLES_FAILED = 13,
+  // A caller's buffer is shorter than what the call writes.
+  HIRAD_STATUS_SHORT_BUFFER = 14,
+  // The caller's ray caster named a polygon id past the scene's polygons.
+  HIRAD_STATUS_CASTER_FAILED = 15,
 } HiradStatus;
 
-// An opened scene, or the reason it could not be opened (opaque to C).
+// An opened scene, or the reason it could not be opened (opaque to C). One call at a time
+// per handle.
 typedef struct HiradScene HiradScene;
+
+// An expanded polygon in world space (m), corners counter-clockwise seen from the front.
+typedef struct HiradWorldPolygon {
+  // Corners (the first `corners` of them used).
+  float corner[4][3];
+  // 3 or 4.
+  uint32_t corners;
+} HiradWorldPolygon;
 
 // Reads `len` bytes of the scene image at byte `offset` into `buf`: 0 when done, any other
 // value an error code of the caller's (reported in the message). Several threads of one
@@ -56,9 +125,265 @@ typedef struct HiradSceneInfo {
   uint32_t materials;
 } HiradSceneInfo;
 
+// What a solve does. Take `hirad_settings_default` and change fields: the defaults are
+// `hirad solve`'s. Units: epsilon, min_area and tolerance are fractions (see the fields),
+// counts are counts.
+typedef struct HiradSettings {
+  // `HIRAD_METHOD_AUTO` (default), `HIRAD_METHOD_HR` or `HIRAD_METHOD_HI`.
+  uint32_t method;
+  // Which instances hierarchical instantiation keeps closed: `HIRAD_INSTANCING_AUTO`
+  // (default), `_ALL`, `_EVERY` (with `instancing_every`) or `_NONE`.
+  uint32_t instancing;
+  // N of `HIRAD_INSTANCING_EVERY` (at least 1); ignored otherwise.
+  uint32_t instancing_every;
+  // Worker threads, 1 to 1024; 0 (default): one per core. Results are identical for any
+  // count.
+  uint32_t threads;
+  // Refinement threshold: a link is refined while its transfer exceeds epsilon times the
+  // scene's emitted power (dimensionless, default 1e-3; smaller is finer and slower).
+  float epsilon;
+  // Smallest patch, as a fraction of the scene's total polygon area, in [0, 1).
+  float min_area;
+  // Deepest quadtree subdivision of an input polygon (at most 24).
+  uint32_t max_depth;
+  // Visibility rays per receiver point and per cluster link (1 to 1024).
+  uint32_t rays;
+  // Convergence: iterations stop when the estimated remaining change of any radiosity is
+  // below this fraction of the largest radiosity (positive).
+  float tolerance;
+  // Cap on iterations per solution (a solve that reaches it is not right).
+  uint32_t max_iterations;
+  // Cap on refine-then-solve rounds.
+  uint32_t max_rounds;
+  // Most children a cluster keeps before grouping levels are inserted (2 to 16).
+  uint32_t max_children;
+  // Final gather rays per receiving side of every polygon: 0 none, `HIRAD_AUTO`
+  // (default) from epsilon, else at most 1,048,576.
+  uint32_t final_rays;
+  // Final gather passes, 1 to 4, or `HIRAD_AUTO` (default).
+  uint32_t final_passes;
+  // Sides suns and sky light directly: bit 0 fronts, bit 1 backs (default 3: both).
+  uint32_t sun_sides;
+  // Closed instances whose original has at most this many polygons block rays with its
+  // polygons (hierarchical instantiation; default 16,384).
+  uint32_t blocking_polygons;
+  // A level's closed approximate instances block with their own polygons when all of
+  // them hold at most this many (default 131,072).
+  uint32_t own_polygons;
+  // The largest power imbalance (emitted + direct against absorbed + escaped) of any
+  // band, in percent, that a solve still calls right (default 5).
+  float max_imbalance_percent;
+  // 1 (default): hierarchical instantiation makes the tables the scene lacks (minutes
+  // per original of a few thousand polygons; kept with the scene handle, in memory
+  // outside the workspace); 0: it refuses with `HIRAD_STATUS_NO_TABLES`.
+  uint32_t make_tables;
+  // Largest side of every direction grid of tables made (4 to 128); 0 (default): those
+  // of `hirad tables`.
+  uint32_t table_max_side;
+} HiradSettings;
+
+// Told how a solve goes: `phase` (a NUL-terminated phase name such as "refining (links)",
+// valid during the call), `done` of `total` units (`total` 0: unknown). Non-zero asks the
+// solve to stop: it returns `HIRAD_STATUS_CANCELLED` at its next check (between passes,
+// iterations, levels and batches of the final gather) and hands out no further polygon.
+typedef int32_t (*HiradProgressFn)(void *user, const char *phase, uint64_t done, uint64_t total);
+
+// A finished polygon: area-weighted means over its patches. Pointers are valid during the
+// callback only.
+typedef struct HiradPolygon {
+  // Global id: the polygon's index in the depth-first expansion of the scene.
+  uint64_t id;
+  // Area (m^2).
+  float area;
+  // Bands: the length of every array below.
+  uint32_t bands;
+  // 1 when its material is two-sided (then the back arrays are non-null).
+  uint32_t two_sided;
+  // Its material's index in the scene (see `hirad_scene_material_name`).
+  uint32_t material;
+  // Front radiosity per band (W/m^2).
+  const float *radiosity;
+  // Front irradiance per band (W/m^2).
+  const float *irradiance;
+  // Back radiosity per band (W/m^2), null for a one-sided polygon.
+  const float *radiosity_back;
+  // Back irradiance per band (W/m^2), null for a one-sided polygon.
+  const float *irradiance_back;
+  // Its material's name (with `labels`), else null.
+  const char *material_name;
+  // Its group, the path of clusters from the scene's root (with `labels`), else null.
+  const char *group;
+} HiradPolygon;
+
+// Receives a finished polygon (valid during the call only). Non-zero stops the solve:
+// `hirad_solve` returns `HIRAD_STATUS_SINK_FAILED`, the code in the message.
+typedef int32_t (*HiradPolygonFn)(void *user, const struct HiradPolygon *polygon);
+
+// The caller's ray caster: the fraction of light that passes the open segment
+// `from`..`to` (3 floats each, m, world space): 1.0 unblocked, 0.0 blocked. `skip` holds
+// two polygon ids (global ids of the expanded scene, see `hirad_scene_world_polygons`) to
+// ignore, `UINT32_MAX` for none. Called from several threads at once.
+typedef float (*HiradTransmittanceFn)(void *user,
+                                      const float *from,
+                                      const float *to,
+                                      const uint32_t *skip);
+
+// The caller's ray caster: the polygon the segment `from`..`to` meets first (not one in
+// `skip`): returns 1 with its id in `*polygon` and the segment parameter (0 at `from`, 1
+// at `to`) in `*t`, or 0 when nothing blocks. Called from several threads at once.
+typedef int32_t (*HiradFirstHitFn)(void *user,
+                                   const float *from,
+                                   const float *to,
+                                   const uint32_t *skip,
+                                   uint32_t *polygon,
+                                   float *t);
+
+// The caller's functions for a solve; every one may be null. A null `HiradCallbacks`
+// pointer is the same as all null.
+typedef struct HiradCallbacks {
+  // Handed to every function as it is.
+  void *user;
+  // Progress, and the way to cancel. Called on the thread that called `hirad_solve`,
+  // never concurrently.
+  HiradProgressFn progress;
+  // Every finished polygon, in increasing global id, as levels finish. Called on the
+  // thread that called `hirad_solve`, never concurrently.
+  HiradPolygonFn polygon;
+  // With `first_hit`: the caller's ray caster instead of the core's BVH (method HR only;
+  // give both or neither). Called from the solve's worker threads at once.
+  HiradTransmittanceFn transmittance;
+  // See `transmittance`.
+  HiradFirstHitFn first_hit;
+  // 1: every `HiradPolygon` carries its material's name and its group (the cluster
+  // path, as the `group` column of `hirad solve --results`); the scene's structure is
+  // then held in memory outside the workspace. 0: both null.
+  uint32_t labels;
+} HiradCallbacks;
+
+// The workspace a solve needs (bytes).
+typedef struct HiradPlan {
+  // What the settings come to on this scene: `HIRAD_METHOD_HR` or `HIRAD_METHOD_HI`.
+  uint32_t method;
+  // Originals whose tables this call made (kept with the handle for later calls).
+  uint32_t tables_made;
+  // The least workspace a solve starts with; below it `hirad_solve` refuses with
+  // `HIRAD_STATUS_WORKSPACE_TOO_SMALL`. For hi, a workspace between it and `sure_bytes`
+  // solves with fewer polygons blocking (as `hirad solve --memory` does) and may still
+  // find a level too large.
+  uint64_t min_bytes;
+  // A workspace that surely opens every level at its coarsest (hr: `min_bytes`).
+  uint64_t sure_bytes;
+  // A workspace that usually lets refinement finish at this epsilon: what `hirad solve`
+  // allocates without `--memory`.
+  uint64_t suggested_bytes;
+} HiradPlan;
+
+// What a solve did. Powers are in W, per band (entries past `bands` are 0).
+typedef struct HiradStats {
+  // `HIRAD_METHOD_HR` or `HIRAD_METHOD_HI`: what solved.
+  uint32_t method;
+  // Worker threads used.
+  uint32_t threads;
+  // Spectral bands.
+  uint32_t bands;
+  // 1 when the last solution met the tolerance.
+  uint32_t converged;
+  // 1 when refinement stopped because the workspace was full.
+  uint32_t budget_limited;
+  // Final gather passes made.
+  uint32_t final_passes;
+  // `own_polygons` as solved (0 where a small workspace turned it off).
+  uint32_t own_polygons;
+  // `blocking_polygons` as solved (0 where a small workspace turned it off).
+  uint32_t blocking_polygons;
+  // Originals whose tables were made for this solve.
+  uint32_t tables_made;
+  // The estimated change still to come, relative to the largest radiosity.
+  float remaining_change;
+  // Input polygons (expanded): the polygons handed to the sink.
+  uint64_t polygons;
+  // Clusters and patches.
+  uint64_t elements;
+  // Links at the end.
+  uint64_t links;
+  // Iterations, all rounds.
+  uint64_t iterations;
+  // Refinement passes, all rounds.
+  uint64_t refinement_passes;
+  // Visibility rays cast.
+  uint64_t rays;
+  // Levels solved (hi: the top level and every instance opened; hr: 0).
+  uint64_t levels;
+  // Closed instances over all levels.
+  uint64_t closed_instances;
+  // Workspace bytes given.
+  uint64_t workspace_bytes;
+  // Most workspace bytes in use at once.
+  uint64_t peak_workspace_bytes;
+  // Wall-clock seconds of the call, tables included.
+  double seconds;
+  // Of them, making tables.
+  double table_seconds;
+  // Emitted by materials.
+  double emitted[HIRAD_MAX_BANDS];
+  // Suns and sky falling on the scene.
+  double direct[HIRAD_MAX_BANDS];
+  // Absorbed by the receiving sides of the polygons (and by closed instances).
+  double absorbed[HIRAD_MAX_BANDS];
+  // Absorbed besides, by the backs of one-sided polygons.
+  double absorbed_backs[HIRAD_MAX_BANDS];
+  // Leaving the scene.
+  double escaped[HIRAD_MAX_BANDS];
+  // (emitted + direct - absorbed - absorbed_backs - escaped) over (emitted + direct), in
+  // percent.
+  double imbalance_percent[HIRAD_MAX_BANDS];
+} HiradStats;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// The name of material `index` at `*name` (NUL-terminated, valid until the handle is
+// freed).
+//
+// # Safety
+// `scene` null or a live handle; `name` null or writable.
+enum HiradStatus hirad_scene_material_name(struct HiradScene *scene,
+                                           uint32_t index,
+                                           const char **name);
+
+// The header line (without a line break) of the results table `hirad solve --results`
+// writes for this scene, at `*header` (valid until the handle is freed), and at
+// `*two_sided` 1 when the table has back-side columns (some polygon is two-sided; a
+// one-sided polygon leaves them empty). Columns: `id,area_m2`, `rad_BAND_W_m2` and
+// `irr_BAND_W_m2` per band (front), the same with `_back` when two-sided, then
+// `material,group`.
+//
+// # Safety
+// `scene` null or a live handle; `header` and `two_sided` null or writable.
+enum HiradStatus hirad_scene_results_header(struct HiradScene *scene,
+                                            const char **header,
+                                            uint32_t *two_sided);
+
+// Writes every polygon of the expanded scene in world space, in global-id order, to
+// `out[0..]` (`capacity` entries; `HiradSceneInfo::expanded_polygons` are needed, else
+// `HIRAD_STATUS_SHORT_BUFFER` and nothing written): what a caller's ray caster intersects,
+// polygon id = index.
+//
+// # Safety
+// `scene` null or a live handle; `out` null or `capacity` writable entries.
+enum HiradStatus hirad_scene_world_polygons(struct HiradScene *scene,
+                                            struct HiradWorldPolygon *out,
+                                            uint64_t capacity);
+
+// Writes `value` in the shortest decimal that reads back as the same float, as hirad's
+// results tables do (`0.1`, `1`, `0.0067882254`, `inf`, `NaN`), NUL-terminated, to
+// `buf[0..len]` when it fits; returns its length without the NUL either way (as
+// `snprintf` does), so a caller can tell it did not fit (at most 64 with any float).
+//
+// # Safety
+// `buf` null or `len` writable bytes.
+size_t hirad_format_float(float value, char *buf, size_t len);
 
 // Opens the scene image in `bytes[0..len]` (copied) into a new handle at `*out`. The
 // handle is made even when the image is not valid (status `HIRAD_STATUS_INVALID_SCENE`): its
@@ -111,6 +436,48 @@ uint64_t hirad_scene_error_offset(const struct HiradScene *scene);
 // # Safety
 // `scene` must be null or a live handle; `info` null or writable.
 enum HiradStatus hirad_scene_info(const struct HiradScene *scene, struct HiradSceneInfo *info);
+
+// Writes the default settings (`hirad solve`'s) to `*settings`.
+//
+// # Safety
+// `settings` must be null or point to writable storage for one `HiradSettings`.
+enum HiradStatus hirad_settings_default(struct HiradSettings *settings);
+
+// Plans a solve of `scene` with `settings`: the method they come to and the workspace it
+// needs, at `*plan`. Where hierarchical instantiation needs tables the scene lacks (and
+// `make_tables` is 1), they are made now (telling `callbacks->progress`; this takes
+// minutes per original) and kept with the handle for the solve.
+//
+// # Safety
+// `scene` null or a live handle; `settings` null or a readable `HiradSettings`;
+// `callbacks` null or a readable `HiradCallbacks` whose functions follow their contracts;
+// `plan` null or writable.
+enum HiradStatus hirad_plan(struct HiradScene *scene,
+                            const struct HiradSettings *settings,
+                            const struct HiradCallbacks *callbacks,
+                            struct HiradPlan *plan);
+
+// Solves `scene` with `settings` in the caller's workspace (`workspace_bytes` bytes at
+// `workspace`, any alignment, cleared first; at least the plan's `min_bytes`), handing
+// every finished polygon to `callbacks->polygon` and the figures to `*stats`. hirad
+// allocates nothing else for the solve itself: the thread pool, tables made for
+// hierarchical instantiation and labels are the exceptions (see docs/embedding.md).
+//
+// Returns `HIRAD_STATUS_OK` only when the numbers are right; `HIRAD_STATUS_NOT_RIGHT`
+// when every polygon was handed over but the solution did not converge or its power
+// balance is off by more than `max_imbalance_percent` (`*stats` is written then too).
+//
+// # Safety
+// `scene` null or a live handle; `settings` null or a readable `HiradSettings`;
+// `workspace` null or `workspace_bytes` writable bytes that nothing else touches during
+// the call; `callbacks` null or a readable `HiradCallbacks` whose functions follow their
+// contracts; `stats` null or writable.
+enum HiradStatus hirad_solve(struct HiradScene *scene,
+                             const struct HiradSettings *settings,
+                             uint8_t *workspace,
+                             size_t workspace_bytes,
+                             const struct HiradCallbacks *callbacks,
+                             struct HiradStats *stats);
 
 #ifdef __cplusplus
 }  // extern "C"

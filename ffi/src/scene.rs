@@ -12,7 +12,7 @@ pub type HiradReadFn =
     Option<unsafe extern "C" fn(user: *mut c_void, offset: u64, buf: *mut u8, len: usize) -> i32>;
 
 /// Where a handle's image bytes come from.
-enum Source {
+pub(crate) enum Source {
     /// A copy of the caller's buffer.
     Owned(Box<[u8]>),
     /// The caller's read function, its pointer and the image's length (bytes).
@@ -22,6 +22,13 @@ enum Source {
         len: u64,
     },
 }
+
+// SAFETY: `Owned` is plain bytes; for `Reader` the caller of `hirad_scene_open_reader`
+// promised a function that may be called from several threads at once with its `user`
+// (solves read the image from their worker threads).
+unsafe impl Sync for Source {}
+// SAFETY: as for `Sync`: the pointer is only handed back to the caller's function.
+unsafe impl Send for Source {}
 
 impl SceneSource for Source {
     fn len(&self) -> u64 {
@@ -53,13 +60,65 @@ impl SceneSource for Source {
     }
 }
 
-/// An opened scene, or the reason it could not be opened (opaque to C).
+/// An opened scene, or the reason it could not be opened (opaque to C). One call at a time
+/// per handle.
 pub struct HiradScene {
-    view: Option<SceneView<Source>>,
+    pub(crate) view: Option<SceneView<Source>>,
     /// The last failure's message ("" after a success), NUL-terminated.
-    message: CString,
+    pub(crate) message: CString,
     /// Byte offset of the image fault, or `u64::MAX` where none applies.
-    offset: u64,
+    pub(crate) offset: u64,
+    /// The image with the directional tables it lacked, made for hierarchical
+    /// instantiation, and the `table_max_side` they were made with (0: the defaults).
+    pub(crate) completed: Option<(SceneView<Source>, u32)>,
+    /// The scene's structure (no table values), for labels and world polygons.
+    pub(crate) model: Option<std::sync::Arc<hirad::scene::Scene>>,
+    /// Strings handed out (names, the results header): they live as long as the handle.
+    pub(crate) strings: Vec<CString>,
+}
+
+impl HiradScene {
+    fn new(view: Option<SceneView<Source>>, message: CString, offset: u64) -> Self {
+        HiradScene {
+            view,
+            message,
+            offset,
+            completed: None,
+            model: None,
+            strings: Vec::new(),
+        }
+    }
+
+    /// Keeps `text` as the handle's message.
+    pub(crate) fn say(&mut self, text: &str) {
+        self.message = message(text);
+    }
+
+    /// The open image, or `NotOpen` (saying so).
+    pub(crate) fn open_view(&self) -> Result<&SceneView<Source>, crate::status::Failure> {
+        match &self.view {
+            Some(v) => Ok(v),
+            None => Err(crate::status::Failure::new(
+                HiradStatus::NotOpen,
+                "the scene handle holds no open scene (its opening failed)",
+            )),
+        }
+    }
+
+    /// The scene's structure, decompiled from the image on first need.
+    pub(crate) fn model(
+        &mut self,
+    ) -> Result<std::sync::Arc<hirad::scene::Scene>, crate::status::Failure> {
+        if let Some(m) = &self.model {
+            return Ok(m.clone());
+        }
+        let view = self.open_view()?;
+        let m = hirad::scene::decompile_records(view)
+            .map_err(|e| crate::status::Failure::new(HiradStatus::InvalidScene, format!("{e}")))?;
+        let m = std::sync::Arc::new(m);
+        self.model = Some(m.clone());
+        Ok(m)
+    }
 }
 
 /// What an opened scene holds (counts of the image's records).
@@ -86,7 +145,7 @@ pub struct HiradSceneInfo {
     pub materials: u32,
 }
 
-fn message(text: &str) -> CString {
+pub(crate) fn message(text: &str) -> CString {
     CString::new(text.replace('\0', " ")).unwrap_or_default()
 }
 
@@ -159,19 +218,15 @@ pub unsafe extern "C" fn hirad_scene_open_reader(
 unsafe fn opened(source: Source, out: *mut *mut HiradScene) -> HiradStatus {
     let (scene, status) = match SceneView::open(source) {
         Ok(view) => (
-            HiradScene {
-                view: Some(view),
-                message: CString::default(),
-                offset: u64::MAX,
-            },
+            HiradScene::new(Some(view), CString::default(), u64::MAX),
             HiradStatus::Ok,
         ),
         Err(e) => (
-            HiradScene {
-                view: None,
-                message: message(&format!("byte {}: {}", e.offset, e.kind)),
-                offset: e.offset,
-            },
+            HiradScene::new(
+                None,
+                message(&format!("byte {}: {}", e.offset, e.kind)),
+                e.offset,
+            ),
             HiradStatus::InvalidScene,
         ),
     };

@@ -44,6 +44,8 @@ pub enum HrError {
         /// The original (index).
         original: u32,
     },
+    /// The caller's progress asked to stop ([`super::Progress::cancelled`]).
+    Cancelled,
 }
 
 impl From<ImageError> for HrError {
@@ -74,6 +76,7 @@ impl core::fmt::Display for HrError {
                 f.write_str("nothing emits light: give a material 'emit', or add a sun or sky")
             }
             HrError::Empty => f.write_str("the scene has no polygons"),
+            HrError::Cancelled => f.write_str("the solve was cancelled by its progress callback"),
             HrError::Settings(what) => write!(f, "invalid setting: {what}"),
             HrError::NoSteadyState { band } => write!(
                 f,

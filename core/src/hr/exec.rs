@@ -76,6 +76,14 @@ impl Executor for Sequential {
 pub trait Progress {
     /// `what` is a phase name ("refining", "solving", ...); `done` of `total` units.
     fn report(&mut self, what: &str, done: u64, total: u64);
+
+    /// True once the caller wants the solve stopped: it ends with
+    /// [`super::HrError::Cancelled`] at its next check (between refinement passes,
+    /// iterations, relighting passes, levels and batches of the final gather), having
+    /// handed no further polygon to the sink. Once true it must stay true.
+    fn cancelled(&mut self) -> bool {
+        false
+    }
 }
 
 /// Ignores progress.

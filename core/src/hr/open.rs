@@ -252,6 +252,9 @@ where
     // opened plants' gather rays read that soil; an opened level's own patches, lit by
     // binned beams, are read by its polygons' rays the same way.
     run.relight(ctx.progress);
+    if ctx.progress.cancelled() {
+        return Err(HrError::Cancelled.into());
+    }
     let Run {
         mut st,
         ws,
@@ -482,6 +485,9 @@ where
         id_offset,
     )
     .map_err(SolveError::Sink)?;
+    if written.cancelled {
+        return Err(HrError::Cancelled.into());
+    }
     ctx.tally.absorbed = match (ctx.tally.absorbed, written.absorbed) {
         (Some(mut sum), Some(a)) => {
             for (s, x) in sum.iter_mut().zip(a) {

@@ -14,6 +14,7 @@ use super::vis::{Ray, Vis, WsPolygons};
 use crate::limits::MAX_BANDS;
 use crate::sink::{PatchResult, PolygonResult, Sink};
 use crate::visibility::Visibility;
+use core::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 
 /// What the output pass measured: the power absorbed by the receiving sides as written (W
@@ -22,6 +23,9 @@ use glam::Vec3;
 pub(crate) struct Written {
     pub absorbed: Option<[f64; MAX_BANDS]>,
     pub rays: u64,
+    /// The progress asked to stop ([`Progress::cancelled`]): the polygons from some batch
+    /// on were neither gathered nor handed over.
+    pub cancelled: bool,
 }
 
 /// The output phase's name for progress reports: the polygons' final gather and their
@@ -88,6 +92,8 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
     let first = first as usize;
     let mut failed: Option<K::Error> = None;
     let mut absorbed = [0.0f64; MAX_BANDS];
+    // Set once the progress asks to stop: the batches left do nothing.
+    let stop = AtomicBool::new(false);
     let mut cast = 0u64;
     run_chunks(
         ex,
@@ -96,7 +102,7 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
         CHUNK * per,
         |c: &Ctx<'_, '_, V>, chunk, buf| {
             buf.fill(0.0);
-            if c.rays == 0 {
+            if c.rays == 0 || stop.load(Ordering::Relaxed) {
                 return;
             }
             let ray = Ray {
@@ -112,7 +118,7 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
         },
         |c: &mut Ctx<'_, '_, V>, chunk, buf| {
             for (slot, i) in (chunk * CHUNK..((chunk + 1) * CHUNK).min(n)).enumerate() {
-                if failed.is_some() {
+                if failed.is_some() || stop.load(Ordering::Relaxed) {
                     return;
                 }
                 let o = &buf[slot * per..(slot + 1) * per];
@@ -129,7 +135,10 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
                 if rays > 0 { GATHER_PHASE } else { WRITE_PHASE },
                 (done * CHUNK).min(n) as u64,
                 (total * CHUNK).min(n) as u64,
-            )
+            );
+            if progress.cancelled() {
+                stop.store(true, Ordering::Relaxed);
+            }
         },
     );
     if let Some(e) = failed {
@@ -138,6 +147,7 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
     Ok(Written {
         absorbed: (rays > 0).then_some(absorbed),
         rays: cast,
+        cancelled: stop.into_inner(),
     })
 }
 

@@ -80,6 +80,9 @@ pub(crate) fn refine_until_stable<V: Visibility + ?Sized, E: Executor, P: Progre
 ) -> bool {
     let mut any = false;
     loop {
+        if progress.cancelled() {
+            return any;
+        }
         st.stats.refinement_passes += 1;
         progress.report("refining (links)", st.links.live() as u64, 0);
         let changed = refine_pass(st, ws) | refine_shadows(st, ws);

@@ -105,6 +105,9 @@ pub(crate) fn relight_passes<V: Visibility + ?Sized, E: Executor>(
     }
     let mut before = leaving_power(st, ws);
     for pass in 1..passes {
+        if progress.cancelled() {
+            return;
+        }
         // What the closed instances show gather rays, as the last solution left them.
         super::blockers::note_radiance(st, ws, ex);
         // What an opened level's rays read of its own light among its siblings.
@@ -343,5 +346,9 @@ impl Progress for Relabel<'_> {
             what
         };
         self.0.report(what, done, total)
+    }
+
+    fn cancelled(&mut self) -> bool {
+        self.0.cancelled()
     }
 }

@@ -215,7 +215,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             return;
         }
         for round in 0..self.st.settings.max_rounds {
-            if self.round(round, progress) {
+            if progress.cancelled() || self.round(round, progress) {
                 break;
             }
         }
@@ -248,6 +248,9 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         sink: &mut K,
     ) -> Result<Stats, SolveError<K::Error>> {
         let (st, ws) = (&mut self.st, &mut *self.ws);
+        if progress.cancelled() {
+            return Err(SolveError::Hr(HrError::Cancelled));
+        }
         if st.stats.diverged {
             // Radiosities without bound: no sink would take them, and none mean anything.
             return Err(SolveError::Hr(HrError::Diverged {
@@ -271,9 +274,15 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             progress,
         );
         super::blockers::note_radiance(st, ws, &mut self.seq);
+        if progress.cancelled() {
+            return Err(SolveError::Hr(HrError::Cancelled));
+        }
         progress.report(output::phase(st, ws), 0, st.polygons as u64);
         let written = output::emit(st, ws, &self.vis, &mut self.seq, progress, sink)
             .map_err(SolveError::Sink)?;
+        if written.cancelled {
+            return Err(SolveError::Hr(HrError::Cancelled));
+        }
         st.stats.rays += written.rays;
         st.stats.rays_by_phase.final_gather += written.rays;
         if let Some(mut absorbed) = written.absorbed {

@@ -59,6 +59,9 @@ pub(crate) fn iterate<E: Executor, P: Progress>(
     st.stats.iteration_capped = false;
     st.stats.converged = false;
     for it in 0..st.settings.max_iterations.max(1) {
+        if progress.cancelled() {
+            break;
+        }
         // Every solution's iterations counted on from the last one's: the count only grows.
         progress.report("solving (iterations)", st.stats.iterations, 0);
         gather(st, ws, ex, false, it == 0);

@@ -160,7 +160,7 @@ fn classify(e: HrError) -> anyhow::Error {
         | HrError::NoTables { .. } => crate::exit::input(error),
         HrError::WorkspaceTooSmall { .. } | HrError::Settings(_) => crate::exit::usage(error),
         HrError::Diverged { .. } => crate::exit::not_right(error),
-        HrError::ScratchTooSmall => error,
+        HrError::ScratchTooSmall | HrError::Cancelled => error,
     }
 }
 
@@ -310,7 +310,7 @@ const FALLBACKS: [Fallback; 2] = [
 
 /// hi's plan of `view` and the settings it solves with under the budget `memory`: each of
 /// [`FALLBACKS`] taken where the budget is below its least and the plan without is smaller
-/// (a note says so).
+/// (a note says so, on the progress line's stream).
 fn budget_plan<S: SceneSource>(
     view: &SceneView<S>,
     settings: Settings,
@@ -318,9 +318,28 @@ fn budget_plan<S: SceneSource>(
     memory: Option<u64>,
     progress: &Progress,
 ) -> Result<(Settings, HiPlan)> {
+    hi_budget_plan(view, settings, inline, memory, &mut |note| {
+        if progress.enabled() {
+            eprintln!("note: {note}");
+        }
+    })
+    .map_err(classify)
+}
+
+/// hi's plan of `view` and the settings it solves with under the budget `memory` (bytes;
+/// `None`: no budget, the settings as given): each of [`FALLBACKS`] taken where the budget is
+/// below its least and the plan without is smaller, `note` told why (a sentence without
+/// "note: "). What `hirad solve --method hi --memory` and the C ABI both solve with.
+pub fn hi_budget_plan<S: SceneSource>(
+    view: &SceneView<S>,
+    settings: Settings,
+    inline: Inline<'_>,
+    memory: Option<u64>,
+    note: &mut dyn FnMut(String),
+) -> Result<(Settings, HiPlan), HrError> {
     let mut scratch = vec![0u8; hr::plan_hi_scratch_bytes(view)];
     let mut settings = settings;
-    let mut p = hr::plan_hi(view, &settings, inline, &mut scratch).map_err(classify)?;
+    let mut p = hr::plan_hi(view, &settings, inline, &mut scratch)?;
     let Some(m) = memory else {
         return Ok((settings, p));
     };
@@ -328,17 +347,15 @@ fn budget_plan<S: SceneSource>(
         let Some(without) = (f.without)(&settings).filter(|_| m < (f.least)(&p)) else {
             continue;
         };
-        let q = hr::plan_hi(view, &without, inline, &mut scratch).map_err(classify)?;
+        let q = hr::plan_hi(view, &without, inline, &mut scratch)?;
         if (f.least)(&q) < (f.least)(&p) {
-            if progress.enabled() {
-                eprintln!(
-                    "note: --memory {:.1} MiB is less than the {:.1} MiB {}: {:.1} MiB surely opens every level)",
-                    mib(m),
-                    mib((f.least)(&p)),
-                    f.why,
-                    mib(q.min_bytes)
-                );
-            }
+            note(format!(
+                "--memory {:.1} MiB is less than the {:.1} MiB {}: {:.1} MiB surely opens every level)",
+                mib(m),
+                mib((f.least)(&p)),
+                f.why,
+                mib(q.min_bytes)
+            ));
             settings = without;
             p = q;
         }

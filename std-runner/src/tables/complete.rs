@@ -128,6 +128,26 @@ pub fn complete(
     max_side: Option<u32>,
     report: &mut dyn FnMut(&str, u64, u64),
 ) -> Result<Completed> {
+    complete_with(
+        scene,
+        originals,
+        threads,
+        max_side,
+        Cache::locate(None).as_ref(),
+        report,
+    )
+}
+
+/// [`complete`] with the cache `cache` (`None`: every table made, nothing stored: what an
+/// embedding caller gets, which touches no file).
+pub fn complete_with(
+    scene: &mut Scene,
+    originals: &[usize],
+    threads: usize,
+    max_side: Option<u32>,
+    cache: Option<&Cache>,
+    report: &mut dyn FnMut(&str, u64, u64),
+) -> Result<Completed> {
     let start = std::time::Instant::now();
     let mut done = Completed::default();
     let todo = missing_of(scene, originals);
@@ -141,10 +161,9 @@ pub fn complete(
         settings.max_out_side = settings.max_out_side.min(m);
         settings.max_single_side = settings.max_single_side.min(m);
     }
-    let cache = Cache::locate(None);
     let mut exec = RayonExecutor::new(threads)?;
     for o in todo {
-        let (t, hit) = obtain(scene, o, &settings, cache.as_ref(), &mut exec, report)?;
+        let (t, hit) = obtain(scene, o, &settings, cache, &mut exec, report)?;
         done.cache_hits += u32::from(hit);
         done.originals.push(t.name.clone());
         if !t.met {

@@ -26,7 +26,9 @@ mod tests_image;
 pub use bake::{TableSettings, bake_alone, bake_original, uniform_direction};
 pub use cache::{Cache, Key};
 pub use check::{CheckReport, check};
-pub use complete::{Completed, complete, instanced_originals, missing, missing_of, obtain};
+pub use complete::{
+    Completed, complete, complete_with, instanced_originals, missing, missing_of, obtain,
+};
 pub use export::{write_bidirectional, write_directions};
 pub use original::{Alone, Lit};
 pub use plot::{map_pixel, picture, plot_sun, write_plots};
