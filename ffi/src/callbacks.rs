@@ -7,6 +7,7 @@ use hirad_core::hr;
 use hirad_core::sink::{PatchResult, PolygonResult, Sink};
 use hirad_core::visibility::Visibility;
 use std::ffi::{CString, c_char, c_void};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Told how a solve goes: `phase` (a NUL-terminated phase name such as "refining (links)",
@@ -115,12 +116,13 @@ pub struct HiradPolygon {
     pub group: *const c_char,
 }
 
-/// The caller's progress for the core, latching a request to stop.
+/// The caller's progress for the core, latching a request to stop (shared with the
+/// executor, which then skips the batches a phase has left).
 pub(crate) struct ProgressCb {
     pub user: *mut c_void,
     pub f: HiradProgressFn,
     pub phase: CString,
-    pub stop: bool,
+    pub stop: Arc<AtomicBool>,
 }
 
 impl ProgressCb {
@@ -129,8 +131,13 @@ impl ProgressCb {
             user: c.user,
             f: c.progress,
             phase: CString::default(),
-            stop: false,
+            stop: Arc::new(AtomicBool::new(false)),
         }
+    }
+
+    /// True once the caller asked to stop.
+    pub(crate) fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
     }
 
     /// Tells the caller; true once it asked to stop.
@@ -141,10 +148,10 @@ impl ProgressCb {
             }
             // SAFETY: the caller's function, given its own pointer and a live C string.
             if unsafe { f(self.user, self.phase.as_ptr(), done, total) } != 0 {
-                self.stop = true;
+                self.stop.store(true, Ordering::Relaxed);
             }
         }
-        self.stop
+        self.stopped()
     }
 }
 
@@ -154,7 +161,7 @@ impl hr::Progress for ProgressCb {
     }
 
     fn cancelled(&mut self) -> bool {
-        self.stop
+        self.stopped()
     }
 }
 

@@ -14,6 +14,7 @@
 //! threads at once.
 
 mod callbacks;
+mod executor;
 mod labels;
 mod prepare;
 mod scene;

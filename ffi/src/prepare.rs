@@ -54,10 +54,12 @@ pub(crate) fn failure(e: HrError) -> Failure {
 
 /// Applies the settings' method and instancing policy to `scene` as `hirad solve` does, and
 /// makes the tables hierarchical instantiation needs and the image lacks (telling
-/// `progress`).
+/// `progress`). `caster`: the caller gave its ray caster, which serves hr only (refused
+/// before any table is made).
 pub(crate) fn prepare(
     scene: &mut HiradScene,
     c: &Checked,
+    caster: bool,
     progress: &mut ProgressCb,
 ) -> Result<Prepared, Failure> {
     let view = scene.open_view()?;
@@ -87,6 +89,12 @@ pub(crate) fn prepare(
     let Some(d) = decision.filter(|_| hi) else {
         return Ok(prepared);
     };
+    if caster {
+        return Err(Failure::new(
+            HiradStatus::InvalidSettings,
+            "a caller's ray caster serves HIRAD_METHOD_HR only: hierarchical instantiation casts rays through each level's own BVH and its closed instances (these settings come to HIRAD_METHOD_HI on this scene: set method to HIRAD_METHOD_HR, or give no caster)",
+        ));
+    }
     if let Some(e) = d.closed_emitter() {
         return Err(Failure::new(
             HiradStatus::InvalidSettings,

@@ -2,6 +2,7 @@
 //! into the caller's workspace with its callbacks.
 
 use crate::callbacks::{CasterCb, HiradCallbacks, ProgressCb, SinkCb};
+use crate::executor::Stoppable;
 use crate::prepare::{self, Prepared};
 use crate::scene::HiradScene;
 use crate::settings::{Checked, HIRAD_METHOD_HI, HIRAD_METHOD_HR, HiradSettings};
@@ -252,8 +253,7 @@ pub unsafe extern "C" fn hirad_plan(
             let polygons = s.open_view()?.info().expanded_polygons;
             let caster = caster_of(&cb, polygons)?;
             let mut progress = ProgressCb::new(&cb);
-            let prepared = prepare::prepare(s, &c, &mut progress)?;
-            refuse_caster_for_hi(&prepared, caster.is_some())?;
+            let prepared = prepare::prepare(s, &c, caster.is_some(), &mut progress)?;
             let b = prepare::bytes(s, &prepared, &c, caster.is_some())?;
             plan.write(HiradPlan {
                 method: method_of(&prepared),
@@ -273,16 +273,6 @@ fn method_of(p: &Prepared) -> u32 {
     } else {
         HIRAD_METHOD_HR
     }
-}
-
-fn refuse_caster_for_hi(p: &Prepared, caster: bool) -> Result<(), Failure> {
-    if caster && p.hi.is_some() {
-        return Err(Failure::new(
-            HiradStatus::InvalidSettings,
-            "a caller's ray caster serves HIRAD_METHOD_HR only: hierarchical instantiation casts rays through each level's own BVH and its closed instances (these settings come to HIRAD_METHOD_HI on this scene: set method to HIRAD_METHOD_HR, or give no caster)",
-        ));
-    }
-    Ok(())
 }
 
 /// Solves `scene` with `settings` in the caller's workspace (`workspace_bytes` bytes at
@@ -353,11 +343,10 @@ unsafe fn solve(
     let polygons = s.open_view()?.info().expanded_polygons;
     let caster = caster_of(cb, polygons)?;
     let mut progress = ProgressCb::new(cb);
-    let prepared = prepare::prepare(s, c, &mut progress)?;
-    if progress.stop {
+    let prepared = prepare::prepare(s, c, caster.is_some(), &mut progress)?;
+    if progress.stopped() {
         return Err(prepare::failure(hr::HrError::Cancelled));
     }
-    refuse_caster_for_hi(&prepared, caster.is_some())?;
     let labels = if cb.labels == 1 {
         Some(RowLabels::shared(s.model()?))
     } else {
@@ -383,8 +372,12 @@ unsafe fn solve(
             std::slice::from_raw_parts_mut(workspace, len)
         }
     };
-    let mut exec = RayonExecutor::new(c.threads)
-        .map_err(|e| Failure::new(HiradStatus::OutOfMemory, format!("the thread pool: {e:#}")))?;
+    let mut exec = Stoppable {
+        inner: RayonExecutor::new(c.threads).map_err(|e| {
+            Failure::new(HiradStatus::OutOfMemory, format!("the thread pool: {e:#}"))
+        })?,
+        stop: progress.stop.clone(),
+    };
     let mut sink = SinkCb {
         user: cb.user,
         f: cb.polygon,
@@ -448,7 +441,7 @@ unsafe fn solve(
             ),
         ));
     }
-    *out = stats_of(&st, &prepared, &solved, bands, exec.threads());
+    *out = stats_of(&st, &prepared, &solved, bands, exec.inner.threads());
     out.seconds = start.elapsed().as_secs_f64();
     match verdict(&st, c, bands) {
         Some(why) => Err(Failure::new(HiradStatus::NotRight, why)),

@@ -27,6 +27,13 @@ pub trait Executor {
         1
     }
 
+    /// True once the caller wants the solve stopped: the batches of chunks a phase has
+    /// left are skipped, and the solve ends at the progress's next check (an executor that
+    /// says so shares the flag with a [`Progress`] whose `cancelled` says so too).
+    fn cancelled(&self) -> bool {
+        false
+    }
+
     /// How many jobs [`Executor::run_jobs`] runs at once (hierarchical instantiation opens
     /// that many sibling instances together, each in its own part of the workspace).
     fn parallelism(&self) -> usize {
@@ -169,6 +176,9 @@ pub(crate) fn run_chunks_scaled<E: Executor, T>(
     // reports charges this work to this phase, not to the one before.
     report(0, n);
     while start < n {
+        if ex.inner.cancelled() {
+            break;
+        }
         let end = (start + batch).min(n);
         let shared: &T = ctx;
         let w = |c: usize, out: &mut [f32]| work(shared, c, out);

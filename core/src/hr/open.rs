@@ -252,7 +252,7 @@ where
     // opened plants' gather rays read that soil; an opened level's own patches, lit by
     // binned beams, are read by its polygons' rays the same way.
     run.relight(ctx.progress);
-    if ctx.progress.cancelled() {
+    if ctx.progress.cancelled() || run.seq.inner.cancelled() {
         return Err(HrError::Cancelled.into());
     }
     let Run {

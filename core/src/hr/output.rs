@@ -94,6 +94,9 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
     let mut absorbed = [0.0f64; MAX_BANDS];
     // Set once the progress asks to stop: the batches left do nothing.
     let stop = AtomicBool::new(false);
+    // Polygons handed over: fewer than `n` without a sink failure means the run was
+    // stopped (by the progress, or by an executor that skipped batches).
+    let mut handed = 0usize;
     let mut cast = 0u64;
     run_chunks(
         ex,
@@ -125,8 +128,9 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
                 let gathered = (c.rays > 0).then(|| &o[1..]);
                 cast += o[0] as u64;
                 let i = (first + i) as u32;
-                if let Err(e) = polygon(c.st, c.ws, i, id_offset, gathered, sink, &mut absorbed) {
-                    failed = Some(e);
+                match polygon(c.st, c.ws, i, id_offset, gathered, sink, &mut absorbed) {
+                    Ok(()) => handed += 1,
+                    Err(e) => failed = Some(e),
                 }
             }
         },
@@ -136,7 +140,8 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
                 (done * CHUNK).min(n) as u64,
                 (total * CHUNK).min(n) as u64,
             );
-            if progress.cancelled() {
+            // A request after the last batch stops nothing: every polygon is out.
+            if done < total && progress.cancelled() {
                 stop.store(true, Ordering::Relaxed);
             }
         },
@@ -147,7 +152,7 @@ pub(crate) fn emit_range<K: Sink, V: Visibility + ?Sized, E: Executor>(
     Ok(Written {
         absorbed: (rays > 0).then_some(absorbed),
         rays: cast,
-        cancelled: stop.into_inner(),
+        cancelled: handed < n,
     })
 }
 

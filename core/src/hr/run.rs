@@ -151,11 +151,17 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         st.stats.workspace_bytes = total as u64;
         bins::allocate(&mut st, ws);
         progress.report("loaded (polygons)", st.polygons as u64, st.polygons as u64);
+        if progress.cancelled() || executor.cancelled() {
+            return Err(HrError::Cancelled);
+        }
         let mut seq = exec::Fallback {
             inner: executor,
             scratch,
         };
         direct::prepare_pending(&mut st, ws, &vis, &mut seq, progress);
+        if progress.cancelled() || seq.inner.cancelled() {
+            return Err(HrError::Cancelled);
+        }
         if st.instances > 0 {
             instance_light::light_instances(&mut st, ws, &vis, &mut seq, progress);
             super::exchange::build(&mut st, ws, &vis, &mut seq, progress);
@@ -248,7 +254,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
         sink: &mut K,
     ) -> Result<Stats, SolveError<K::Error>> {
         let (st, ws) = (&mut self.st, &mut *self.ws);
-        if progress.cancelled() {
+        if progress.cancelled() || self.seq.inner.cancelled() {
             return Err(SolveError::Hr(HrError::Cancelled));
         }
         if st.stats.diverged {
@@ -274,7 +280,7 @@ impl<'w, V: Visibility + ?Sized, E: Executor> Run<'w, V, E> {
             progress,
         );
         super::blockers::note_radiance(st, ws, &mut self.seq);
-        if progress.cancelled() {
+        if progress.cancelled() || self.seq.inner.cancelled() {
             return Err(SolveError::Hr(HrError::Cancelled));
         }
         progress.report(output::phase(st, ws), 0, st.polygons as u64);
