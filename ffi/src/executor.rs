@@ -8,13 +8,13 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// [`RayonExecutor`] that says when the caller asked to stop.
-pub(crate) struct Stoppable {
-    pub inner: RayonExecutor,
+pub(crate) struct Stoppable<'e, 'p> {
+    pub inner: &'e mut RayonExecutor<'p>,
     /// Set by the progress callback's answer (shared with `ProgressCb`).
     pub stop: Arc<AtomicBool>,
 }
 
-impl Executor for Stoppable {
+impl Executor for Stoppable<'_, '_> {
     fn compute(
         &mut self,
         chunks: Range<usize>,

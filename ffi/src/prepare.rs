@@ -6,6 +6,7 @@ use crate::callbacks::ProgressCb;
 use crate::scene::{HiradScene, Source};
 use crate::settings::{Checked, Method};
 use crate::status::{Failure, HiradStatus};
+use hirad::solve::RayonExecutor;
 use hirad::solve::policy::{self, Decision};
 use hirad_core::hr::{self, HrError};
 use hirad_core::image::SceneView;
@@ -61,6 +62,7 @@ pub(crate) fn prepare(
     c: &Checked,
     caster: bool,
     progress: &mut ProgressCb,
+    exec: &mut RayonExecutor<'_>,
 ) -> Result<Prepared, Failure> {
     let view = scene.open_view()?;
     let policy = match c.method {
@@ -136,7 +138,7 @@ pub(crate) fn prepare(
             hirad::tables::complete_with(
                 &mut model,
                 &missing,
-                c.threads,
+                exec,
                 c.table_max_side,
                 None,
                 &mut |what: &str, done: u64, total: u64| {

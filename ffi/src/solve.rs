@@ -251,20 +251,33 @@ pub unsafe extern "C" fn hirad_plan(
             let c = checked(settings)?;
             let cb = callbacks_of(callbacks)?;
             let polygons = s.open_view()?.info().expanded_polygons;
-            let caster = caster_of(&cb, polygons)?;
+            let caster = caster_of(&cb, polygons)?.is_some();
             let mut progress = ProgressCb::new(&cb);
-            let prepared = prepare::prepare(s, &c, caster.is_some(), &mut progress)?;
-            let b = prepare::bytes(s, &prepared, &c, caster.is_some())?;
-            plan.write(HiradPlan {
-                method: method_of(&prepared),
-                tables_made: prepared.tables_made,
-                min_bytes: b.min,
-                sure_bytes: b.sure,
-                suggested_bytes: b.suggested,
-            });
+            let made = with_threads(c.threads, |exec| {
+                let prepared = prepare::prepare(s, &c, caster, &mut progress, exec)?;
+                let b = prepare::bytes(s, &prepared, &c, caster)?;
+                Ok(HiradPlan {
+                    method: method_of(&prepared),
+                    tables_made: prepared.tables_made,
+                    min_bytes: b.min,
+                    sure_bytes: b.sure,
+                    suggested_bytes: b.suggested,
+                })
+            })?;
+            plan.write(made);
             Ok(())
         })
     }
+}
+
+/// Runs `f` with a thread pool that lives for the call only: no thread of hirad's runs
+/// after a C function returns (a library that may be unloaded must leave none behind).
+fn with_threads<R>(
+    threads: usize,
+    f: impl FnOnce(&mut RayonExecutor<'_>) -> Result<R, Failure>,
+) -> Result<R, Failure> {
+    hirad::solve::scoped(threads, f)
+        .map_err(|e| Failure::new(HiradStatus::OutOfMemory, format!("the thread pool: {e:#}")))?
 }
 
 fn method_of(p: &Prepared) -> u32 {
@@ -314,7 +327,9 @@ pub unsafe extern "C" fn hirad_solve(
             let c = checked(settings)?;
             let cb = callbacks_of(callbacks)?;
             let mut out = HiradStats::default();
-            let result = solve(s, &c, &cb, workspace, workspace_bytes, &mut out);
+            let result = with_threads(c.threads, |exec| {
+                solve(s, &c, &cb, workspace, workspace_bytes, exec, &mut out)
+            });
             if !stats.is_null()
                 && result
                     .as_ref()
@@ -337,13 +352,14 @@ unsafe fn solve(
     cb: &HiradCallbacks,
     workspace: *mut u8,
     len: usize,
+    pool: &mut RayonExecutor<'_>,
     out: &mut HiradStats,
 ) -> Result<(), Failure> {
     let start = std::time::Instant::now();
     let polygons = s.open_view()?.info().expanded_polygons;
     let caster = caster_of(cb, polygons)?;
     let mut progress = ProgressCb::new(cb);
-    let prepared = prepare::prepare(s, c, caster.is_some(), &mut progress)?;
+    let prepared = prepare::prepare(s, c, caster.is_some(), &mut progress, pool)?;
     if progress.stopped() {
         return Err(prepare::failure(hr::HrError::Cancelled));
     }
@@ -373,9 +389,7 @@ unsafe fn solve(
         }
     };
     let mut exec = Stoppable {
-        inner: RayonExecutor::new(c.threads).map_err(|e| {
-            Failure::new(HiradStatus::OutOfMemory, format!("the thread pool: {e:#}"))
-        })?,
+        inner: pool,
         stop: progress.stop.clone(),
     };
     let mut sink = SinkCb {

@@ -15,34 +15,89 @@ use std::sync::{Arc, Mutex};
 /// on it (applying results in order), and a pool of as many other threads as cores would
 /// leave them spinning on the cores it needs (a 2-thread solve of a 122,000-polygon tree
 /// took 8% longer that way). rayon leaks such a pool's registry, so each thread keeps the
-/// pools it made and reuses them.
-pub struct RayonExecutor {
-    pool: Option<Arc<rayon::ThreadPool>>,
+/// pools it made and reuses them ([`RayonExecutor::new`]); an embedder that must not keep
+/// threads past a call takes [`scoped`] instead.
+pub struct RayonExecutor<'p> {
+    pool: Option<Pool<'p>>,
     outputs: Vec<Vec<f32>>,
     first: usize,
     batch: usize,
 }
 
-impl RayonExecutor {
-    /// A pool of `threads` threads (at least 1).
+/// The pool an executor runs on: one this thread keeps, or one that lives for a call.
+enum Pool<'p> {
+    Kept(Arc<rayon::ThreadPool>),
+    Borrowed(&'p rayon::ThreadPool),
+}
+
+impl Pool<'_> {
+    fn get(&self) -> &rayon::ThreadPool {
+        match self {
+            Pool::Kept(p) => p,
+            Pool::Borrowed(p) => p,
+        }
+    }
+}
+
+impl RayonExecutor<'static> {
+    /// A pool of `threads` threads (at least 1), kept by this thread for later calls.
     pub fn new(threads: usize) -> anyhow::Result<Self> {
         let pool = if threads > 1 {
-            Some(pool_for_this_thread(threads)?)
+            Some(Pool::Kept(pool_for_this_thread(threads)?))
         } else {
             None
         };
-        Ok(RayonExecutor {
+        Ok(RayonExecutor::with(pool, threads))
+    }
+}
+
+impl<'p> RayonExecutor<'p> {
+    fn with(pool: Option<Pool<'p>>, threads: usize) -> Self {
+        RayonExecutor {
             pool,
             outputs: Vec::new(),
             first: 0,
             batch: 64 * threads.max(1),
-        })
+        }
     }
 
     /// Threads in the pool.
     pub fn threads(&self) -> usize {
-        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+        self.pool
+            .as_ref()
+            .map_or(1, |p| p.get().current_num_threads())
     }
+}
+
+/// Runs `f` with an executor of `threads` threads (at least 1) that exist only during the
+/// call: they are joined before it returns, so nothing of hirad runs after it (a library
+/// that may be unloaded, a caller that counts its threads), and the calling thread never
+/// becomes one of them (no per-thread state of rayon's is left on it).
+pub fn scoped<R>(threads: usize, f: impl FnOnce(&mut RayonExecutor<'_>) -> R) -> anyhow::Result<R> {
+    if threads <= 1 {
+        return Ok(f(&mut RayonExecutor::with(None, 1)));
+    }
+    let handles = Mutex::new(Vec::new());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .spawn_handler(|t| {
+            let h = std::thread::Builder::new()
+                .name(format!("hirad-{}", t.index()))
+                .spawn(|| t.run())?;
+            handles.lock().unwrap_or_else(|e| e.into_inner()).push(h);
+            Ok(())
+        })
+        .build()?;
+    let r = f(&mut RayonExecutor::with(
+        Some(Pool::Borrowed(&pool)),
+        threads,
+    ));
+    // Dropping the pool tells its threads to end; each is joined.
+    drop(pool);
+    for h in handles.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        let _ = h.join();
+    }
+    Ok(r)
 }
 
 thread_local! {
@@ -73,7 +128,7 @@ fn pool_for_this_thread(threads: usize) -> anyhow::Result<Arc<rayon::ThreadPool>
     })
 }
 
-impl Executor for RayonExecutor {
+impl Executor for RayonExecutor<'_> {
     fn compute(
         &mut self,
         chunks: Range<usize>,
@@ -97,7 +152,7 @@ impl Executor for RayonExecutor {
         let outs = &mut self.outputs[..n];
         match &self.pool {
             // A single chunk gains nothing from another thread.
-            Some(pool) if n > 1 => pool.install(|| {
+            Some(pool) if n > 1 => pool.get().install(|| {
                 outs.par_iter_mut()
                     .enumerate()
                     .for_each(|(k, out)| work(start + k, out));
@@ -132,7 +187,7 @@ impl Executor for RayonExecutor {
                 // and its lock never waits. Jobs are handed out one by one, so that a long
                 // one does not hold back those after it.
                 let locks: Vec<Mutex<&mut P>> = parts.iter_mut().map(Mutex::new).collect();
-                pool.install(|| {
+                pool.get().install(|| {
                     jobs.par_iter_mut()
                         .enumerate()
                         .with_max_len(1)

@@ -8,7 +8,7 @@ pub mod policy;
 #[cfg(test)]
 mod tests_adapter;
 
-pub use executor::RayonExecutor;
+pub use executor::{RayonExecutor, scoped};
 use std::time::Instant;
 
 use crate::output::Progress;

@@ -131,19 +131,19 @@ pub fn complete(
     complete_with(
         scene,
         originals,
-        threads,
+        &mut RayonExecutor::new(threads)?,
         max_side,
         Cache::locate(None).as_ref(),
         report,
     )
 }
 
-/// [`complete`] with the cache `cache` (`None`: every table made, nothing stored: what an
-/// embedding caller gets, which touches no file).
+/// [`complete`] on the executor `exec`, with the cache `cache` (`None`: every table made,
+/// nothing stored: what an embedding caller gets, which touches no file).
 pub fn complete_with(
     scene: &mut Scene,
     originals: &[usize],
-    threads: usize,
+    exec: &mut RayonExecutor<'_>,
     max_side: Option<u32>,
     cache: Option<&Cache>,
     report: &mut dyn FnMut(&str, u64, u64),
@@ -161,9 +161,8 @@ pub fn complete_with(
         settings.max_out_side = settings.max_out_side.min(m);
         settings.max_single_side = settings.max_single_side.min(m);
     }
-    let mut exec = RayonExecutor::new(threads)?;
     for o in todo {
-        let (t, hit) = obtain(scene, o, &settings, cache, &mut exec, report)?;
+        let (t, hit) = obtain(scene, o, &settings, cache, exec, report)?;
         done.cache_hits += u32::from(hit);
         done.originals.push(t.name.clone());
         if !t.met {
