@@ -1,15 +1,14 @@
 #!/usr/bin/env bash
 # Runs every fuzz target for SECONDS seconds (default 60), seeded from fixtures/.
 # Usage: fuzz/run.sh [SECONDS [TARGET...]] (targets: binary_view text_parse obj_import
-# results_read c_api; all by
-# default). Needs cargo-fuzz (`cargo install cargo-fuzz --locked`).
+# results_read c_api c_solve; all by default). Needs cargo-fuzz (`cargo install cargo-fuzz --locked`).
 # Prints each target's execution count; exits non-zero on the first finding (the crashing
 # input is left in fuzz/artifacts/TARGET/).
 set -euo pipefail
 SECONDS_PER_TARGET="${1:-60}"
 shift || true
 TARGETS=("$@")
-[ "${#TARGETS[@]}" -gt 0 ] || TARGETS=(binary_view text_parse obj_import results_read c_api)
+[ "${#TARGETS[@]}" -gt 0 ] || TARGETS=(binary_view text_parse obj_import results_read c_api c_solve)
 cd "$(dirname "$0")"
 ROOT="$(cd .. && pwd)"
 
@@ -45,6 +44,13 @@ seed() {
           { printf "\\x0$mode"; cat "$image.hirb"; } > "corpus/$target/$(basename "${f%.hir}")_$mode.seed"
         done
         rm -f "$image" "$image.hirb"
+      done ;;
+    c_solve)
+      # Bytes that pick a fixture, settings, a workspace and callbacks: all zeros (the
+      # defaults on the first fixture), and a few of every byte value.
+      head -c 64 /dev/zero > "corpus/$target/defaults.seed"
+      for v in 1 2 3 85 170 255; do
+        printf "$(printf '\\x%02x' "$v")%.0s" $(seq 64) > "corpus/$target/bytes_$v.seed"
       done ;;
     binary_view)
       (cd "$ROOT" && cargo build --release -q -p hirad)

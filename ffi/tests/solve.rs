@@ -1012,3 +1012,69 @@ fn hi_without_tables_refuses_unless_it_may_make_them() {
     assert_eq!(again.tables_made, 0);
     assert_eq!(again.suggested_bytes, first.suggested_bytes);
 }
+
+unsafe extern "C" fn read_bytes(user: *mut c_void, offset: u64, buf: *mut u8, len: usize) -> i32 {
+    let bytes = unsafe { &*(user as *const Vec<u8>) };
+    let from = offset as usize;
+    match bytes.get(from..from + len) {
+        Some(src) => {
+            unsafe { ptr::copy_nonoverlapping(src.as_ptr(), buf, len) };
+            0
+        }
+        None => 5,
+    }
+}
+
+#[test]
+fn a_scene_read_through_the_callers_function_solves_as_one_in_memory() {
+    for (name, settings) in [
+        ("small_plant.hir", quick()),
+        (
+            "small_plant.hir",
+            HiradSettings {
+                method: HIRAD_METHOD_HI,
+                instancing: HIRAD_INSTANCING_ALL,
+                table_max_side: 4,
+                threads: 2,
+                ..quick()
+            },
+        ),
+        (
+            "chair_room.hir",
+            HiradSettings {
+                threads: 2,
+                ..quick()
+            },
+        ),
+    ] {
+        let bytes = image(name);
+        let memory = Scene::open(&bytes);
+        let mut a = Seen::default();
+        let (status, _) = solve(&memory, &settings, &mut a);
+        assert!(
+            matches!(status, HiradStatus::Ok | HiradStatus::NotRight),
+            "{name}: {}",
+            memory.message()
+        );
+
+        let mut s: *mut HiradScene = ptr::null_mut();
+        let status = unsafe {
+            hirad_scene_open_reader(
+                Some(read_bytes),
+                &bytes as *const Vec<u8> as *mut c_void,
+                bytes.len() as u64,
+                &mut s,
+            )
+        };
+        assert_eq!(status, HiradStatus::Ok);
+        let reader = Scene(s);
+        let mut b = Seen::default();
+        let (status, _) = solve(&reader, &settings, &mut b);
+        assert!(
+            matches!(status, HiradStatus::Ok | HiradStatus::NotRight),
+            "{name}: {}",
+            reader.message()
+        );
+        assert!(a.rows == b.rows, "{name}");
+    }
+}
