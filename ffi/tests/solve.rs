@@ -94,10 +94,24 @@ struct Seen {
     world: Vec<HiradWorldPolygon>,
     /// The caster names this polygon id for every hit (to test a bad id).
     bad_id: bool,
+    /// Progress and polygons came on other threads than the caller's.
+    foreign_thread: bool,
+    caller: Option<std::thread::ThreadId>,
+}
+
+impl Seen {
+    /// Notes whether a callback runs on the thread that made this.
+    fn on_caller(&mut self) {
+        let me = std::thread::current().id();
+        if *self.caller.get_or_insert(me) != me {
+            self.foreign_thread = true;
+        }
+    }
 }
 
 unsafe extern "C" fn on_polygon(user: *mut c_void, p: *const HiradPolygon) -> i32 {
     let seen = unsafe { &mut *(user as *mut Seen) };
+    seen.on_caller();
     let p = unsafe { &*p };
     if seen.fail_at == Some(seen.rows.len()) {
         return 7;
@@ -254,6 +268,7 @@ unsafe extern "C" fn first_hit(
 }
 
 fn callbacks(seen: &mut Seen) -> HiradCallbacks {
+    seen.caller = Some(std::thread::current().id());
     HiradCallbacks {
         user: seen as *mut Seen as *mut c_void,
         progress: Some(on_progress),
@@ -348,6 +363,10 @@ fn hr_through_the_c_functions_equals_the_runners_solve_bit_for_bit() {
         assert!(stats.imbalance_percent[b].abs() < 1.0, "{stats:?}");
     }
     assert_eq!(stats.workspace_bytes, plan.suggested_bytes);
+    assert!(
+        !seen.foreign_thread,
+        "progress and polygons on the caller's thread only"
+    );
     // Phases were told, in the core's names.
     assert!(
         seen.phases.iter().any(|p| p.starts_with("refining")),
@@ -532,6 +551,10 @@ fn progress_cancels_hierarchical_instantiation_too() {
     assert_eq!(stats.method, HIRAD_METHOD_HI);
     assert!(stats.levels > 1, "{stats:?}");
     assert_eq!(all.rows.len() as u64, stats.polygons);
+    assert!(
+        !all.foreign_thread,
+        "progress and polygons on the caller's thread only"
+    );
     let calls = all.calls;
     for k in [0, calls / 4, calls / 2, calls - 1] {
         let mut seen = Seen {
