@@ -62,7 +62,10 @@ fuzz_target!(|data: &[u8]| {
         (Ok(view), HiradStatus::Ok) => {
             assert!(message.is_empty());
             let mut info = HiradSceneInfo::default();
-            assert_eq!(unsafe { hirad_scene_info(scene, &mut info) }, HiradStatus::Ok);
+            assert_eq!(
+                unsafe { hirad_scene_info(scene, &mut info) },
+                HiradStatus::Ok
+            );
             assert_eq!(info.expanded_polygons, view.info().expanded_polygons);
         }
         (Err(e), HiradStatus::InvalidScene) if fails_from == u64::MAX => {

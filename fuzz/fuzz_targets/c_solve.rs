@@ -19,13 +19,18 @@ fn images() -> &'static [Vec<u8>] {
     static IMAGES: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
     IMAGES.get_or_init(|| {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures");
-        ["small_plant.hir", "cornell_box.hir", "furnace.hir", "parallel_squares.hir"]
-            .iter()
-            .map(|f| {
-                let scene = hirad::files::load_scene(&root.join(f)).unwrap().scene;
-                hirad::scene::compile(&scene).unwrap()
-            })
-            .collect()
+        [
+            "small_plant.hir",
+            "cornell_box.hir",
+            "furnace.hir",
+            "parallel_squares.hir",
+        ]
+        .iter()
+        .map(|f| {
+            let scene = hirad::files::load_scene(&root.join(f)).unwrap().scene;
+            hirad::scene::compile(&scene).unwrap()
+        })
+        .collect()
     })
 }
 
@@ -100,7 +105,12 @@ unsafe extern "C" fn on_polygon(user: *mut c_void, p: *const HiradPolygon) -> i3
     0
 }
 
-unsafe extern "C" fn unused_transmittance(_: *mut c_void, _: *const f32, _: *const f32, _: *const u32) -> f32 {
+unsafe extern "C" fn unused_transmittance(
+    _: *mut c_void,
+    _: *const f32,
+    _: *const f32,
+    _: *const u32,
+) -> f32 {
     1.0
 }
 
@@ -137,7 +147,10 @@ fuzz_target!(|data: &[u8]| {
         HiradStatus::Ok
     );
     let mut info = HiradSceneInfo::default();
-    assert_eq!(unsafe { hirad_scene_info(scene, &mut info) }, HiradStatus::Ok);
+    assert_eq!(
+        unsafe { hirad_scene_info(scene, &mut info) },
+        HiradStatus::Ok
+    );
 
     let d = HiradSettings::default();
     let mut s = HiradSettings {
@@ -180,7 +193,11 @@ fuzz_target!(|data: &[u8]| {
         labels: u32::from(b.u8() % 3),
     };
     let mode = b.u8();
-    let cb: *const HiradCallbacks = if mode & 1 == 0 { &callbacks } else { ptr::null() };
+    let cb: *const HiradCallbacks = if mode & 1 == 0 {
+        &callbacks
+    } else {
+        ptr::null()
+    };
 
     let mut plan = HiradPlan::default();
     let planned = unsafe { hirad_plan(scene, &s, cb, &mut plan) };
@@ -205,7 +222,11 @@ fuzz_target!(|data: &[u8]| {
     };
     let offset = usize::from(b.u8() % 16);
     let mut buf = vec![0u8; len + offset];
-    let workspace = if mode & 2 != 0 && len == 0 { ptr::null_mut() } else { unsafe { buf.as_mut_ptr().add(offset) } };
+    let workspace = if mode & 2 != 0 && len == 0 {
+        ptr::null_mut()
+    } else {
+        unsafe { buf.as_mut_ptr().add(offset) }
+    };
     // Room for a HiradStats at an offset of 4 bytes too.
     let mut raw = [0u64; std::mem::size_of::<HiradStats>() / 8 + 2];
     let stats: *mut HiradStats = match mode >> 2 & 3 {
@@ -222,7 +243,11 @@ fuzz_target!(|data: &[u8]| {
             assert_eq!(planned, HiradStatus::Ok);
             assert!(m.is_empty());
             if !cb.is_null() {
-                assert_eq!(seen.ids, (0..n as u64).collect::<Vec<_>>(), "every polygon once, in order");
+                assert_eq!(
+                    seen.ids,
+                    (0..n as u64).collect::<Vec<_>>(),
+                    "every polygon once, in order"
+                );
             }
         }
         HiradStatus::NotRight => {
@@ -235,7 +260,10 @@ fuzz_target!(|data: &[u8]| {
             assert!(seen.ids.len() < n);
         }
         HiradStatus::SinkFailed => assert_eq!(Some(seen.ids.len()), seen.fail_at),
-        HiradStatus::WorkspaceTooSmall => assert!(planned != HiradStatus::Ok || (len as u64) < plan.sure_bytes, "{len} {plan:?}: {m}"),
+        HiradStatus::WorkspaceTooSmall => assert!(
+            planned != HiradStatus::Ok || (len as u64) < plan.sure_bytes,
+            "{len} {plan:?}: {m}"
+        ),
         HiradStatus::Misaligned => assert!(mode >> 2 & 3 == 1),
         HiradStatus::NullArgument => assert!(workspace.is_null()),
         HiradStatus::InvalidSettings | HiradStatus::NoTables | HiradStatus::InvalidScene => {
@@ -244,6 +272,9 @@ fuzz_target!(|data: &[u8]| {
         other => panic!("{other:?}: {m}"),
     }
     // The handle stays usable.
-    assert_eq!(unsafe { hirad_scene_info(scene, &mut info) }, HiradStatus::Ok);
+    assert_eq!(
+        unsafe { hirad_scene_info(scene, &mut info) },
+        HiradStatus::Ok
+    );
     unsafe { hirad_scene_free(scene) };
 });
