@@ -2,32 +2,37 @@
 per phase when tqdm is installed, else nothing."""
 
 import sys
+import time
 
 
 class TqdmProgress:
     """Draws the solve's phases as tqdm bars on stderr, one bar at a time: a phase with a
-    known total shows its count, an open count (iterations) a running number. Bars appear
-    after the solve has run a second (as the CLI's) and vanish when done."""
+    known total shows its count, an open count (iterations) a running number. Nothing is
+    drawn before the solve has run a second (as the CLI's bar); bars vanish when done."""
+
+    QUIET_START = 1.0
 
     def __init__(self, tqdm):
         self._tqdm = tqdm
         self._bar = None
         self._phase = None
+        self._start = time.monotonic()
 
     def __call__(self, phase, done, total):
+        if time.monotonic() - self._start < self.QUIET_START:
+            return True
         if phase != self._phase or self._bar is None:
             self.close()
             self._phase = phase
-            kwargs = dict(total=total, desc=phase, leave=False, file=sys.stderr,
-                          dynamic_ncols=True)
-            try:
-                self._bar = self._tqdm(delay=1.0, **kwargs)
-            except TypeError:  # tqdm < 4.60 has no delay
-                self._bar = self._tqdm(**kwargs)
+            self._bar = self._tqdm(total=total, desc=phase, leave=False, file=sys.stderr,
+                                   dynamic_ncols=True)
         if total is not None and self._bar.total != total:
             self._bar.total = total
-        self._bar.n = done
-        self._bar.refresh()
+        if done >= self._bar.n:
+            self._bar.update(done - self._bar.n)
+        else:
+            self._bar.n = done
+            self._bar.refresh()
         return True
 
     def close(self):

@@ -1,0 +1,75 @@
+"""hirad.solve gives the command line's numbers, value by value."""
+
+import csv
+import json
+
+import numpy as np
+
+import hirad
+from conftest import run_cli
+
+# Stats that depend on the run's time or on the files it wrote.
+TIMED = {"seconds", "phases", "outputs"}
+
+
+def read_results(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_small_plant_equals_the_cli(hirad_bin, in_root, tmp_path):
+    csv_path, stats_path = tmp_path / "plant.csv", tmp_path / "plant.json"
+    run_cli(hirad_bin, "solve", "fixtures/small_plant.hir", "--results", csv_path, "--stats",
+            stats_path)
+    s = hirad.solve("fixtures/small_plant.hir", progress=False)
+    rows = read_results(csv_path)
+    assert len(rows) == len(s) == 105
+    assert s.band_names == ["par", "nir"]
+    for k, row in enumerate(rows):
+        assert int(row["id"]) == s.ids[k]
+        # The CSV holds shortest round-trip floats: parsed, they are the f32 bits again.
+        assert np.float32(float(row["area_m2"])) == s.area[k]
+        for b, band in enumerate(s.band_names):
+            assert np.float32(float(row[f"rad_{band}_W_m2"])) == s.radiosity[k, b]
+            assert np.float32(float(row[f"irr_{band}_W_m2"])) == s.irradiance[k, b]
+            back = row[f"rad_back_{band}_W_m2"]
+            if back == "":
+                assert np.isnan(s.radiosity_back[k, b])
+                assert np.isnan(s.irradiance_back[k, b])
+            else:
+                assert np.float32(float(back)) == s.radiosity_back[k, b]
+                assert np.float32(float(row[f"irr_back_{band}_W_m2"])) == s.irradiance_back[k, b]
+        assert row["material"] == s.materials[s.material_index[k]]
+        assert row["group"] == s.groups[s.group_index[k]]
+    cli = json.loads(stats_path.read_text())
+    assert set(cli) == set(s.stats)
+    for key in set(cli) - TIMED:
+        if key == "settings":
+            assert {k: v for k, v in cli[key].items()} == s.stats[key]
+        else:
+            assert cli[key] == s.stats[key], key
+    assert s.stats["method"] == "hr"  # no tables: the CLI's default falls back to hr
+
+
+def test_group_sums_equal_the_sums_of_rows(in_root):
+    s = hirad.solve("fixtures/small_plant.hir", progress=False)
+    leaf = {"leaf": ([0.1, 0.45], [0.05, 0.45]), "stem": ([0.08, 0.3], [0, 0]),
+            "soil": ([0.1, 0.2], [0, 0])}
+    absorbed = np.zeros((len(s), 2))
+    for k in range(len(s)):
+        rho, tau = (np.array(v) for v in leaf[s.materials[s.material_index[k]]])
+        a = (1 - rho - tau) * s.irradiance[k]
+        if not np.isnan(s.irradiance_back[k, 0]):
+            a = a + (1 - rho - tau) * s.irradiance_back[k]
+        absorbed[k] = s.area[k] * a
+    for g in range(len(s.groups)):
+        rows = s.group_index == g
+        np.testing.assert_allclose(s.group_area[g], s.area[rows].astype(np.float64).sum(),
+                                   rtol=1e-12)
+        np.testing.assert_allclose(s.group_absorbed[g], absorbed[rows].sum(axis=0),
+                                   rtol=1e-6)  # the material values as f32
+    # The groups' absorbed power is the balance's.
+    stats_absorbed = [p["absorbed"] for p in s.stats["power"]]
+    np.testing.assert_allclose(s.group_absorbed.sum(axis=0), stats_absorbed, rtol=1e-6)
+    assert "scene/soil" in s.groups
+    assert list(s.group_ids) == list(range(len(s.groups)))
