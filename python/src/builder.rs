@@ -135,7 +135,12 @@ impl Builder {
             .material_index(name)
             .map(|i| i as u32)
             .ok_or_else(|| {
-                let known: Vec<&str> = self.scene.materials.iter().map(|m| m.name.as_str()).collect();
+                let known: Vec<&str> = self
+                    .scene
+                    .materials
+                    .iter()
+                    .map(|m| m.name.as_str())
+                    .collect();
                 anyhow!(
                     "unknown material '{name}' (add it with add_material first; known: {})",
                     if known.is_empty() {
@@ -170,7 +175,10 @@ impl Builder {
             match polygon_shape(&corners) {
                 Ok(_) => {}
                 Err(ShapeError::TooSmall) => {
-                    bail!("{}", scene::too_small_message(&format!("triangle {t}"), &corners))
+                    bail!(
+                        "{}",
+                        scene::too_small_message(&format!("triangle {t}"), &corners)
+                    )
                 }
                 Err(e) => bail!(
                     "triangle {t} (corners {:?}, {:?}, {:?}): {e}",
@@ -192,7 +200,10 @@ impl Builder {
                     let next = self.scene.root.children.len();
                     let k = *self.groups.entry(g).or_insert(next);
                     if k == next {
-                        self.scene.root.children.push(Cluster::named(&g.to_string()));
+                        self.scene
+                            .root
+                            .children
+                            .push(Cluster::named(&g.to_string()));
                         self.triangles.push(Vec::new());
                     }
                     k + 1
@@ -229,9 +240,8 @@ impl Builder {
     /// Adds one direction of the sky (the `.hir` format's `sky from`): `towards` that patch
     /// of sky, `irradiance` per band on a plane facing it (W/m^2).
     pub fn add_sky(&mut self, towards: Vec3, irradiance: &[f32]) -> Result<()> {
-        let d = unit_direction(towards).ok_or_else(|| {
-            anyhow!("the sky direction {:?} is zero", towards.to_array())
-        })?;
+        let d = unit_direction(towards)
+            .ok_or_else(|| anyhow!("the sky direction {:?} is zero", towards.to_array()))?;
         self.scene.sky.push(scene::light(d, irradiance));
         Ok(())
     }

@@ -57,7 +57,7 @@ fn value_error(e: anyhow::Error) -> PyErr {
 
 /// Little-endian numbers of `width` bytes from `bytes`, refused when not whole.
 fn numbers<const W: usize, T>(bytes: &[u8], what: &str, f: fn([u8; W]) -> T) -> PyResult<Vec<T>> {
-    if bytes.len() % W != 0 {
+    if !bytes.len().is_multiple_of(W) {
         return Err(PyValueError::new_err(format!(
             "{what}: {} bytes is not a whole number of {W}-byte values",
             bytes.len()
@@ -88,6 +88,7 @@ impl SceneBuilder {
 
     /// Adds a material; values are per band (the Python layer broadcasts scalars).
     #[pyo3(signature = (name, reflectance, transmittance=None, emission=None, back_reflectance=None, back_emission=None))]
+    #[allow(clippy::too_many_arguments)]
     fn add_material(
         &mut self,
         py: Python<'_>,
@@ -162,7 +163,10 @@ impl SceneBuilder {
                     "one material and one group per triangle",
                 ));
             }
-            let materials: Vec<u32> = m.iter().map(|&x| x.clamp(0, u32::MAX as i64) as u32).collect();
+            let materials: Vec<u32> = m
+                .iter()
+                .map(|&x| x.clamp(0, u32::MAX as i64) as u32)
+                .collect();
             let groups: Option<Vec<u64>> = match g {
                 Some(g) => Some(
                     g.iter()
@@ -185,18 +189,36 @@ impl SceneBuilder {
     }
 
     /// Adds a sun (direction towards it; irradiance per band on a plane facing it, W/m^2).
-    fn add_sun(&mut self, py: Python<'_>, direction: [f64; 3], irradiance: Vec<f32>) -> PyResult<()> {
+    fn add_sun(
+        &mut self,
+        py: Python<'_>,
+        direction: [f64; 3],
+        irradiance: Vec<f32>,
+    ) -> PyResult<()> {
         guarded(py, || {
-            let d = Vec3::new(direction[0] as f32, direction[1] as f32, direction[2] as f32);
+            let d = Vec3::new(
+                direction[0] as f32,
+                direction[1] as f32,
+                direction[2] as f32,
+            );
             self.inner.add_sun(d, &irradiance).map_err(value_error)
         })
     }
 
     /// Adds a direction of the sky (towards that patch of sky; irradiance per band on a
     /// plane facing it, W/m^2).
-    fn add_sky(&mut self, py: Python<'_>, direction: [f64; 3], irradiance: Vec<f32>) -> PyResult<()> {
+    fn add_sky(
+        &mut self,
+        py: Python<'_>,
+        direction: [f64; 3],
+        irradiance: Vec<f32>,
+    ) -> PyResult<()> {
         guarded(py, || {
-            let d = Vec3::new(direction[0] as f32, direction[1] as f32, direction[2] as f32);
+            let d = Vec3::new(
+                direction[0] as f32,
+                direction[1] as f32,
+                direction[2] as f32,
+            );
             self.inner.add_sky(d, &irradiance).map_err(value_error)
         })
     }
@@ -256,7 +278,12 @@ impl SceneBuilder {
     /// Material names, in order.
     #[getter]
     fn materials(&self) -> Vec<String> {
-        self.inner.scene.materials.iter().map(|m| m.name.clone()).collect()
+        self.inner
+            .scene
+            .materials
+            .iter()
+            .map(|m| m.name.clone())
+            .collect()
     }
 
     /// Suns and sky directions.
@@ -305,7 +332,7 @@ fn solve<'py>(
         (
             SceneInput::Model {
                 name: "hirad.Scene".into(),
-                scene: b.inner.scene.clone(),
+                scene: Box::new(b.inner.scene.clone()),
             },
             Some(b.row_triangles(py)),
         )
@@ -322,10 +349,7 @@ fn solve<'py>(
     };
     let cancelled = match cancelled {
         Some(c) => c,
-        None => py
-            .import("hirad._errors")?
-            .getattr("Cancelled")?
-            .unbind(),
+        None => py.import("hirad._errors")?.getattr("Cancelled")?.unbind(),
     };
     let stop = Arc::new(Mutex::new(watch::Stop::default()));
     let reporter = watch::progress(progress, cancelled, Arc::clone(&stop));
@@ -360,8 +384,14 @@ fn solve<'py>(
         d.set_item("radiosity", le_bytes(py, &r.radiosity, f32::to_le_bytes))?;
         d.set_item("irradiance", le_bytes(py, &r.irradiance, f32::to_le_bytes))?;
         if r.any_two_sided() {
-            d.set_item("radiosity_back", le_bytes(py, &r.radiosity_back, f32::to_le_bytes))?;
-            d.set_item("irradiance_back", le_bytes(py, &r.irradiance_back, f32::to_le_bytes))?;
+            d.set_item(
+                "radiosity_back",
+                le_bytes(py, &r.radiosity_back, f32::to_le_bytes),
+            )?;
+            d.set_item(
+                "irradiance_back",
+                le_bytes(py, &r.irradiance_back, f32::to_le_bytes),
+            )?;
         } else {
             d.set_item("radiosity_back", py.None())?;
             d.set_item("irradiance_back", py.None())?;
@@ -372,7 +402,10 @@ fn solve<'py>(
         d.set_item("group_names", g.names.clone())?;
         d.set_item("group_of_row", le_bytes(py, &g.of_row, u32::to_le_bytes))?;
         d.set_item("group_area", le_bytes(py, &g.area, f64::to_le_bytes))?;
-        d.set_item("group_absorbed", le_bytes(py, &g.absorbed, f64::to_le_bytes))?;
+        d.set_item(
+            "group_absorbed",
+            le_bytes(py, &g.absorbed, f64::to_le_bytes),
+        )?;
         let mut names: Vec<String> = Vec::new();
         let mut index = std::collections::HashMap::new();
         let of_row: Vec<u32> = g

@@ -26,7 +26,7 @@ pub enum SceneInput {
         /// What messages call it (e.g. `hirad.Scene`).
         name: String,
         /// The model (checked before the solve, as a loaded file's is).
-        scene: Scene,
+        scene: Box<Scene>,
     },
 }
 
@@ -250,7 +250,7 @@ pub fn solve(input: SceneInput, request: &Request, progress: Option<Progress>) -
                 .map_err(|e| crate::exit::input(anyhow!("{name}: {e}")))?;
             let up = Up::of_scene(&scene);
             let loaded = Loaded {
-                scene,
+                scene: *scene,
                 format: Format::Binary,
                 warnings: Vec::new(),
                 warnings_total: 0,

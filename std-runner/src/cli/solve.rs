@@ -127,8 +127,8 @@ pub fn solve(
     let policy = matches!(a.method_given, None | Some(Method::Hi))
         .then(|| a.instancing.unwrap_or(Policy::Auto))
         .filter(|&p| p != Policy::None);
-    let binary = model.is_none()
-        && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
+    let binary =
+        model.is_none() && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
     // Which originals hi closes, decided on the file's image where there is one, else on the
     // loaded scene's.
     let mut decision: Option<Decision> = match policy {
@@ -462,22 +462,10 @@ pub fn solve(
                     .map_or(hirad_core::hr::Inline::NONE, |d| d.inline());
                 match &image {
                     Some(view) => solve::solve_hi_image(
-                        view,
-                        &settings,
-                        inline,
-                        threads,
-                        a.memory,
-                        &progress,
-                        &mut tee,
+                        view, &settings, inline, threads, a.memory, &progress, &mut tee,
                     ),
                     None => solve::solve_hi(
-                        scene,
-                        &settings,
-                        inline,
-                        threads,
-                        a.memory,
-                        &progress,
-                        &mut tee,
+                        scene, &settings, inline, threads, a.memory, &progress, &mut tee,
                     ),
                 }
             } else {
@@ -548,9 +536,7 @@ pub fn solve(
                 .num_threads(threads)
                 .build()?;
             let r = pool
-                .install(|| {
-                    exact::solve_exact_obvhs_with(scene, &settings, &mut tee, &progress)
-                })
+                .install(|| exact::solve_exact_obvhs_with(scene, &settings, &mut tee, &progress))
                 .map_err(|e| {
                     let error = anyhow!("{}: {e}", a.scene.display());
                     match e {
