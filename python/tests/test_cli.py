@@ -4,6 +4,7 @@ import csv
 import json
 
 import numpy as np
+import pytest
 
 import hirad
 from conftest import run_cli
@@ -17,11 +18,17 @@ def read_results(path):
         return list(csv.DictReader(f))
 
 
-def test_small_plant_equals_the_cli(hirad_bin, in_root, tmp_path):
+@pytest.mark.parametrize("words,kwargs", [
+    ([], {}),
+    (["--method", "hi"], dict(method="hi")),
+    (["--method", "hr", "--epsilon", "0.01", "--threads", "1", "--memory", "64M"],
+     dict(method="hr", epsilon=0.01, threads=1, memory="64M")),
+], ids=["default", "hi", "hr-settings"])
+def test_small_plant_equals_the_cli(hirad_bin, in_root, tmp_path, words, kwargs):
     csv_path, stats_path = tmp_path / "plant.csv", tmp_path / "plant.json"
-    run_cli(hirad_bin, "solve", "fixtures/small_plant.hir", "--results", csv_path, "--stats",
-            stats_path)
-    s = hirad.solve("fixtures/small_plant.hir", progress=False)
+    run_cli(hirad_bin, "solve", "fixtures/small_plant.hir", *words, "--results", csv_path,
+            "--stats", stats_path)
+    s = hirad.solve("fixtures/small_plant.hir", progress=False, **kwargs)
     rows = read_results(csv_path)
     assert len(rows) == len(s) == 105
     assert s.band_names == ["par", "nir"]
@@ -48,7 +55,8 @@ def test_small_plant_equals_the_cli(hirad_bin, in_root, tmp_path):
             assert {k: v for k, v in cli[key].items()} == s.stats[key]
         else:
             assert cli[key] == s.stats[key], key
-    assert s.stats["method"] == "hr"  # no tables: the CLI's default falls back to hr
+    if not kwargs:
+        assert s.stats["method"] == "hr"  # no tables: the CLI's default falls back to hr
 
 
 def test_group_sums_equal_the_sums_of_rows(in_root):

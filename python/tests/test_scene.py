@@ -139,3 +139,35 @@ def test_tqdm_bar_is_optional():
     pytest.importorskip("tqdm")
     scene, *_ = canopy(leaves=50, seed=2)
     assert len(hirad.solve(scene)) == 52  # a tqdm bar (after a second), no error
+
+
+def test_ctrl_c_stops_a_long_solve(tmp_path):
+    """SIGINT during a solve raises KeyboardInterrupt within a second, not at its end."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    script = tmp_path / "long.py"
+    script.write_text(f"""
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
+sys.path.insert(0, {os.path.dirname(__file__)!r})
+from conftest import canopy
+import hirad
+scene, *_ = canopy(leaves=20000, seed=1)
+print("solving", flush=True)
+try:
+    hirad.solve(scene, epsilon=1e-5, progress=False)
+    print("finished", flush=True)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+""")
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "solving"
+    time.sleep(2.0)
+    p.send_signal(signal.SIGINT)
+    sent = time.monotonic()
+    out, _ = p.communicate(timeout=60)
+    assert out.strip() == "interrupted"
+    assert time.monotonic() - sent < 5.0
