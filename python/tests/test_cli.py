@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import hirad
-from conftest import run_cli
+from conftest import FIXTURES, run_cli
 
 # Stats that depend on the run's time or on the files it wrote.
 TIMED = {"seconds", "phases", "outputs"}
@@ -16,6 +16,35 @@ TIMED = {"seconds", "phases", "outputs"}
 def read_results(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
+
+
+def assert_equals_csv(s, csv_path):
+    """Every value of the solution `s` is the one of the CLI's results table, bit for bit."""
+    rows = read_results(csv_path)
+    assert len(rows) == len(s)
+    for k, row in enumerate(rows):
+        assert int(row["id"]) == s.ids[k]
+        # The CSV holds shortest round-trip floats: parsed, they are the f32 bits again.
+        assert np.float32(float(row["area_m2"])) == s.area[k]
+        for b, band in enumerate(s.band_names):
+            assert np.float32(float(row[f"rad_{band}_W_m2"])) == s.radiosity[k, b]
+            assert np.float32(float(row[f"irr_{band}_W_m2"])) == s.irradiance[k, b]
+            if s.radiosity_back is None:
+                assert f"rad_back_{band}_W_m2" not in row
+                continue
+            back = row[f"rad_back_{band}_W_m2"]
+            if back == "":
+                assert np.isnan(s.radiosity_back[k, b])
+                assert np.isnan(s.irradiance_back[k, b])
+            else:
+                assert np.float32(float(back)) == s.radiosity_back[k, b]
+                assert np.float32(float(row[f"irr_back_{band}_W_m2"])) == s.irradiance_back[k, b]
+        assert row["material"] == s.materials[s.material_index[k]]
+        assert row["group"] == s.groups[s.group_index[k]]
+        if "face" in row:
+            assert int(row["face"]) == s.faces[k]
+        else:
+            assert s.faces is None
 
 
 @pytest.mark.parametrize("words,kwargs", [
@@ -29,25 +58,8 @@ def test_small_plant_equals_the_cli(hirad_bin, in_root, tmp_path, words, kwargs)
     run_cli(hirad_bin, "solve", "fixtures/small_plant.hir", *words, "--results", csv_path,
             "--stats", stats_path)
     s = hirad.solve("fixtures/small_plant.hir", progress=False, **kwargs)
-    rows = read_results(csv_path)
-    assert len(rows) == len(s) == 105
-    assert s.band_names == ["par", "nir"]
-    for k, row in enumerate(rows):
-        assert int(row["id"]) == s.ids[k]
-        # The CSV holds shortest round-trip floats: parsed, they are the f32 bits again.
-        assert np.float32(float(row["area_m2"])) == s.area[k]
-        for b, band in enumerate(s.band_names):
-            assert np.float32(float(row[f"rad_{band}_W_m2"])) == s.radiosity[k, b]
-            assert np.float32(float(row[f"irr_{band}_W_m2"])) == s.irradiance[k, b]
-            back = row[f"rad_back_{band}_W_m2"]
-            if back == "":
-                assert np.isnan(s.radiosity_back[k, b])
-                assert np.isnan(s.irradiance_back[k, b])
-            else:
-                assert np.float32(float(back)) == s.radiosity_back[k, b]
-                assert np.float32(float(row[f"irr_back_{band}_W_m2"])) == s.irradiance_back[k, b]
-        assert row["material"] == s.materials[s.material_index[k]]
-        assert row["group"] == s.groups[s.group_index[k]]
+    assert len(s) == 105
+    assert_equals_csv(s, csv_path)
     cli = json.loads(stats_path.read_text())
     assert set(cli) == set(s.stats)
     for key in set(cli) - TIMED:
@@ -81,3 +93,30 @@ def test_group_sums_equal_the_sums_of_rows(in_root):
     np.testing.assert_allclose(s.group_absorbed.sum(axis=0), stats_absorbed, rtol=1e-6)
     assert "scene/soil" in s.groups
     assert list(s.group_ids) == list(range(len(s.groups)))
+
+
+def test_obj_equals_the_cli(hirad_bin, in_root, tmp_path):
+    csv_path = tmp_path / "cornell.csv"
+    run_cli(hirad_bin, "solve", "fixtures/obj/cornell_triangles.obj", "--results", csv_path)
+    s = hirad.solve("fixtures/obj/cornell_triangles.obj", progress=False)
+    assert s.faces is not None
+    assert_equals_csv(s, csv_path)
+
+
+def test_tables_image_solved_by_hi_equals_the_cli(hirad_bin, tmp_path):
+    """A .hirb that carries its originals' tables, solved by hi level by level straight from
+    the file (the model then keeps no vertices: groups and materials still come out)."""
+    hirb = tmp_path / "plant_tables.hirb"
+    # Coarse tables, quickly made: they miss their error targets (exit 1) but are written.
+    r = run_cli(hirad_bin, "tables", FIXTURES / "small_plant.hir", "-o", hirb,
+                "--instancing", "all", "--no-cache", "-q", "--max-side", "4",
+                "--max-tau-side", "4", "--max-out-side", "4", "--max-single-side", "0",
+                check=False)
+    assert hirb.exists(), r.stderr
+    csv_path = tmp_path / "plant.csv"
+    run_cli(hirad_bin, "solve", hirb, "--instancing", "all", "--results", csv_path)
+    s = hirad.solve(hirb, instancing="all", progress=False)
+    assert s.stats["method"] == "hi"
+    assert_equals_csv(s, csv_path)
+    np.testing.assert_allclose(s.group_absorbed.sum(axis=0),
+                               [p["absorbed"] for p in s.stats["power"]], rtol=1e-6)
