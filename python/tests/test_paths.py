@@ -39,3 +39,9 @@ def test_obj_has_face_numbers(hirad_bin, tmp_path, in_root):
 def test_bytes_of_a_path_are_refused_with_a_type_error():
     with pytest.raises(TypeError):
         hirad.solve(42)
+
+
+def test_loader_warnings_are_python_warnings(in_root):
+    with pytest.warns(hirad.HiradWarning, match=r"max_groups.mtl:9:5: Tf 1 1 1"):
+        s = hirad.solve("fixtures/obj/max_groups.obj", progress=False)
+    assert any("Tf 1 1 1" in w for w in s.warnings)
