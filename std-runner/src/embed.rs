@@ -295,3 +295,130 @@ pub fn solve(input: SceneInput, request: &Request, progress: Option<Progress>) -
         failure,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, MaterialData, light, triangle};
+    use glam::Vec3;
+
+    /// A lit floor triangle (one-sided) under a two-sided leaf, each in its own named
+    /// cluster.
+    fn floor_and_leaf() -> Scene {
+        let mut s = Scene::new(1);
+        let material = |rho: f32, tau: f32, two_sided: bool| MaterialData {
+            bands: 1,
+            two_sided,
+            rho_front: [rho, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            emit_front: [0.0; 8],
+            rho_back: [
+                if two_sided { rho } else { 0.0 },
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            tau: [tau, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            emit_back: [0.0; 8],
+        };
+        s.materials.push(Material {
+            name: "floor".into(),
+            data: material(0.3, 0.0, false),
+        });
+        s.materials.push(Material {
+            name: "leaf".into(),
+            data: material(0.2, 0.3, true),
+        });
+        s.root = crate::scene::Cluster::named("scene");
+        for (name, z, m) in [("floor", 0.0, 0), ("leaf", 0.5, 1)] {
+            let mut c = crate::scene::Cluster::named(name);
+            let a = c.vertex(Vec3::new(0.0, 0.0, z));
+            let b = c.vertex(Vec3::new(1.0, 0.0, z));
+            let d = c.vertex(Vec3::new(0.0, 1.0, z));
+            c.polygons.push(triangle(a, b, d, m));
+            s.root.children.push(c);
+        }
+        s.suns
+            .push(light(Vec3::new(0.2, 0.1, 1.0).normalize(), &[100.0]));
+        s
+    }
+
+    #[test]
+    fn settings_become_the_command_line_and_bad_ones_are_usage_errors() {
+        let r = Request {
+            method: Some("hr".into()),
+            epsilon: Some(0.01),
+            threads: Some(1),
+            memory: Some("64M".into()),
+            ..Request::default()
+        };
+        let a = r.args(std::path::Path::new("x.hir")).unwrap();
+        assert_eq!(a.epsilon, 0.01);
+        assert_eq!(a.threads, Some(1));
+        assert_eq!(a.memory, Some(64 << 20));
+        assert!(a.quiet);
+        for bad in [
+            Request {
+                threads: Some(0),
+                ..Request::default()
+            },
+            Request {
+                memory: Some("lots".into()),
+                ..Request::default()
+            },
+            Request {
+                method: Some("fastest".into()),
+                ..Request::default()
+            },
+        ] {
+            let e = bad.args(std::path::Path::new("x.hir")).unwrap_err();
+            assert_eq!(crate::exit::class_of(&e), crate::exit::Exit::Usage);
+            assert!(!e.to_string().starts_with("error:"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_model_solves_and_its_groups_sum_the_balance() {
+        let scene = floor_and_leaf();
+        let input = SceneInput::Model {
+            name: "test scene".into(),
+            scene: Box::new(scene),
+        };
+        let e = solve(input, &Request::default(), None).unwrap();
+        assert_eq!(e.rows.len(), 2);
+        assert_eq!(e.rows.bands, 1);
+        assert_eq!(e.band_names, ["0"]);
+        assert_eq!(e.groups.names, ["scene/floor", "scene/leaf"]);
+        assert_eq!(e.groups.materials, ["floor", "leaf"]);
+        assert!(e.rows.any_two_sided());
+        assert!(e.rows.radiosity_back[0].is_nan());
+        assert!(e.rows.irradiance[0] > 0.0 && e.rows.irradiance[1] > 0.0);
+        let stats: serde_json::Value = serde_json::from_str(&e.stats_json).unwrap();
+        assert_eq!(stats["scene"], "test scene");
+        let absorbed = stats["power"][0]["absorbed"].as_f64().unwrap();
+        let sum: f64 = e.groups.absorbed.iter().sum();
+        assert!(
+            (sum - absorbed).abs() <= 1e-6 * absorbed,
+            "{sum} {absorbed}"
+        );
+        // The floor absorbs 70% of what reaches its front.
+        let floor = (1.0 - 0.3f32 as f64) * e.rows.area[0] as f64 * e.rows.irradiance[0] as f64;
+        assert!((e.groups.absorbed[0] - floor).abs() <= 1e-9 * floor);
+    }
+
+    #[test]
+    fn a_bad_model_is_an_input_error_named_as_given() {
+        let mut scene = floor_and_leaf();
+        scene.suns.clear();
+        let input = SceneInput::Model {
+            name: "my scene".into(),
+            scene: Box::new(scene),
+        };
+        let e = solve(input, &Request::default(), None).err().unwrap();
+        assert_eq!(crate::exit::class_of(&e), crate::exit::Exit::Input);
+        assert!(format!("{e:#}").starts_with("my scene: "), "{e:#}");
+    }
+}
