@@ -171,3 +171,31 @@ except KeyboardInterrupt:
     out, _ = p.communicate(timeout=60)
     assert out.strip() == "interrupted"
     assert time.monotonic() - sent < 5.0
+
+
+def test_the_gil_is_released_while_solving():
+    """Another Python thread runs while the solver works."""
+    import threading
+
+    scene, *_ = canopy(leaves=998, seed=11)
+    ticks = []
+    done = threading.Event()
+
+    def tick():
+        while not done.is_set():
+            ticks.append(time.monotonic())
+            time.sleep(0.002)
+
+    t = threading.Thread(target=tick)
+    t.start()
+    try:
+        start = time.monotonic()
+        hirad.solve(scene, progress=False)
+        end = time.monotonic()
+    finally:
+        done.set()
+        t.join()
+    during = [x for x in ticks if start < x < end]
+    # At one tick per 2 ms (or slower on a busy machine), far more than the ten or so a
+    # solve that held the GIL would allow between its progress reports.
+    assert len(during) >= min(50, (end - start) / 0.02), (len(during), end - start)

@@ -37,6 +37,8 @@ class Solution:
     * ``triangles`` (int64 per row, for a ``hirad.Scene``): the input triangle of the row;
       ``faces`` (int64 per row, for an OBJ scene): its face number (1-based); else None.
     * ``warnings``: the run's warnings (also issued as ``hirad.HiradWarning``).
+    * ``failure``: why the numbers are not right (not converged, power balance off), or
+      None (``stats["verdict"]`` says the same).
     """
 
     def __init__(self, raw, from_model):
