@@ -263,6 +263,15 @@ impl SceneBuilder {
         PyBytes::new(py, &rows)
     }
 
+    /// Writes the scene as `.hir` (text) or `.hirb` (binary image) by the path's extension,
+    /// checked as a solve checks it, through a temporary file renamed into place.
+    fn save(&self, py: Python<'_>, path: &str) -> PyResult<u64> {
+        guarded(py, || {
+            hirad::generate::write(&self.inner.scene, std::path::Path::new(path))
+                .map_err(|e| error(py, class_name(&e), format!("{e:#}")))
+        })
+    }
+
     /// Triangles added.
     #[getter]
     fn triangles(&self) -> u64 {

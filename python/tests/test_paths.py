@@ -45,3 +45,24 @@ def test_loader_warnings_are_python_warnings(in_root):
     with pytest.warns(hirad.HiradWarning, match=r"max_groups.mtl:9:5: Tf 1 1 1"):
         s = hirad.solve("fixtures/obj/max_groups.obj", progress=False)
     assert any("Tf 1 1 1" in w for w in s.warnings)
+
+
+@pytest.mark.parametrize("suffix", [".hir", ".hirb"])
+def test_a_saved_scene_solves_to_the_same_numbers(tmp_path, suffix):
+    from conftest import canopy
+
+    scene, *_ = canopy(leaves=100, seed=9)
+    path = tmp_path / f"canopy{suffix}"
+    assert scene.save(path) > 0
+    a = hirad.solve(scene, progress=False)
+    b = hirad.solve(path, progress=False)
+    for k in ["ids", "area", "radiosity", "irradiance", "radiosity_back", "irradiance_back"]:
+        np.testing.assert_array_equal(getattr(a, k), getattr(b, k))
+    assert a.groups == b.groups
+    np.testing.assert_array_equal(a.group_absorbed, b.group_absorbed)
+
+
+def test_saving_as_another_format_is_refused(tmp_path):
+    s = hirad.Scene(bands=2)
+    with pytest.raises(ValueError, match="hir or .hirb"):
+        s.save(tmp_path / "x.obj")

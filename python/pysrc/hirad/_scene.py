@@ -259,6 +259,22 @@ class Scene:
             self._builder.add_sky(_direction(f"sky direction {k}", d[k]),
                                   _per_band(self, f"sky irradiance {k}", e[k]))
 
+    def save(self, path):
+        """Writes the scene to ``path``, a ``.hir`` (text, docs/format.md) or ``.hirb``
+        (binary image) file by its extension, for the ``hirad`` command line (``hirad solve
+        SCENE --image OUT.png``, ``hirad info``): the file solves to the same numbers.
+        Returns the bytes written. Raises ``hirad.InputError`` for a scene the solver would
+        refuse (a fault the format cannot hold) and ``ValueError`` for another extension.
+        """
+        import os
+
+        p = os.fspath(path)
+        if isinstance(p, bytes):
+            p = os.fsdecode(p)
+        if not p.lower().endswith((".hir", ".hirb")):
+            raise ValueError(f"save: {p}: expected a path ending in .hir or .hirb")
+        return self._builder.save(p)
+
     def __repr__(self):
         suns, sky = self._builder.lights
         return (f"hirad.Scene(bands={self._names or self.bands}, materials={self.materials}, "
