@@ -2,8 +2,10 @@
 # CI of the Python package, run from anywhere on a fresh machine with Rust and python3: a
 # virtual environment (target/python-venv), `pip install ./python` (maturin from the
 # package's build-system, the extension built in release), numpy, pytest and tqdm, the
-# `hirad` command line in release (the tests compare with it value by value), then pytest
-# on python/tests. Exits non-zero when anything fails.
+# cargo fmt and clippy on the package's crate (outside the workspace, so the workspace's own
+# checks do not see it), the `hirad` command line in release (the tests compare with it value
+# by value), then pytest on python/tests, whose summary is the last line but one. Exits
+# non-zero when anything fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)
@@ -23,6 +25,11 @@ fi
 
 echo "== python: pip install ./python numpy pytest tqdm"
 "$venv/bin/pip" install --quiet --disable-pip-version-check ./python numpy pytest tqdm
+
+echo "== python: cargo fmt and clippy on the package's crate"
+(cd python && cargo fmt -- --check)
+(cd python && PYO3_PYTHON="$venv/bin/python" CARGO_TARGET_DIR=$target/python-clippy \
+  cargo clippy --all-targets -- -D warnings)
 
 echo "== python: the hirad command line (release) to compare with"
 CARGO_TARGET_DIR=$target cargo build --release -p hirad --bin hirad
