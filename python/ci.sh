@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # CI of the Python package, run from anywhere on a fresh machine with Rust and python3: a
 # virtual environment (target/python-venv), `pip install ./python` (maturin from the
-# package's build-system, the extension built in release), numpy, pytest and tqdm, the
-# cargo fmt and clippy on the package's crate (outside the workspace, so the workspace's own
+# package's build-system, the extension built in release), numpy, pytest and tqdm; cargo
+# fmt and clippy on the package's crate (outside the workspace, so the workspace's own
 # checks do not see it), the `hirad` command line in release (the tests compare with it value
 # by value), then pytest on python/tests, whose summary is the last line but one. Exits
 # non-zero when anything fails.
