@@ -3,6 +3,7 @@
 
 pub mod cli;
 pub mod directional;
+pub mod embed;
 pub mod exact;
 pub mod exit;
 pub mod files;

@@ -8,14 +8,84 @@ use crate::exact::{self, ExactSettings};
 use crate::exit::{input, not_right, usage};
 use crate::files;
 use crate::output::{self, ImageSink, Outputs, Progress, ReferenceSink, ResultsFile, SolveReport};
+use crate::scene::Scene;
 use crate::solve;
 use crate::solve::policy::{Decision, Policy};
 use anyhow::{Context, Result, anyhow};
 use hirad_core::hr::Settings;
+use hirad_core::sink::{PatchResult, PolygonResult, Sink};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Runs `hirad solve`.
 pub fn run(a: Args) -> Result<()> {
+    let solved = solve(a, None, None, &mut NoExtra)?;
+    match solved.failure {
+        Some(why) => Err(not_right(anyhow!(why))),
+        None => Ok(()),
+    }
+}
+
+/// What a solve hands back besides the files it wrote: what a library caller (the Python
+/// package, through `crate::embed`) reads instead of the summary on stderr.
+pub struct Solved {
+    /// The stats report, as `--stats` writes it (its verdict included).
+    pub report: SolveReport,
+    /// The scene model as solved (row labels: material and group of every polygon). A
+    /// `.hirb` solved by hi from the file has no vertices left in it.
+    pub scene: Arc<Scene>,
+    /// For an OBJ scene, the face number (1-based) of every polygon, in global-id order.
+    pub faces: Option<Vec<u64>>,
+    /// The loader's warnings and the run's own (an image nearly black, a power balance off
+    /// by more than 1%), as the CLI prints them after `warning: `.
+    pub warnings: Vec<String>,
+    /// Why the numbers are not right (the CLI then exits 1 after writing its outputs).
+    pub failure: Option<String>,
+}
+
+/// The CLI's extra sink: its results go to the files only.
+struct NoExtra;
+
+impl Sink for NoExtra {
+    type Error = anyhow::Error;
+
+    fn polygon(&mut self, _: &PolygonResult<'_>) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Every result of a solve to the outputs the arguments name and to the caller's `extra`
+/// sink.
+struct Tee<'a> {
+    outputs: &'a mut Outputs,
+    extra: &'a mut (dyn Sink<Error = anyhow::Error> + Send),
+}
+
+impl Sink for Tee<'_> {
+    type Error = anyhow::Error;
+
+    fn patch(&mut self, patch: &PatchResult<'_>) -> Result<()> {
+        self.outputs.patch(patch)?;
+        self.extra.patch(patch)
+    }
+
+    fn polygon(&mut self, polygon: &PolygonResult<'_>) -> Result<()> {
+        self.outputs.polygon(polygon)?;
+        self.extra.polygon(polygon)
+    }
+}
+
+/// The whole of `hirad solve` but its exit status: the method chosen as the CLI chooses it,
+/// the scene loaded (or `model`, a scene built in memory and named `a.scene` in messages),
+/// tables made where hi needs them, the solve, the files the arguments name, and the
+/// report. Every result also goes to `extra`, in global-id order. `progress`: the reporter
+/// (default: on stderr unless `a.quiet`).
+pub fn solve(
+    a: Args,
+    model: Option<files::Loaded>,
+    progress: Option<Progress>,
+    extra: &mut (dyn Sink<Error = anyhow::Error> + Send),
+) -> Result<Solved> {
     let start = Instant::now();
     let refuse = |m: String| Err(usage(anyhow!(m)));
     if let (Some(_), Some(m @ (Method::Hr | Method::Exact))) = (a.instancing, a.method_given) {
@@ -57,7 +127,8 @@ pub fn run(a: Args) -> Result<()> {
     let policy = matches!(a.method_given, None | Some(Method::Hi))
         .then(|| a.instancing.unwrap_or(Policy::Auto))
         .filter(|&p| p != Policy::None);
-    let binary = files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
+    let binary =
+        model.is_none() && files::Format::of(&a.scene).is_ok_and(|f| f == files::Format::Binary);
     // Which originals hi closes, decided on the file's image where there is one, else on the
     // loaded scene's.
     let mut decision: Option<Decision> = match policy {
@@ -87,7 +158,9 @@ pub fn run(a: Args) -> Result<()> {
     // file on demand: its tables go into the workspace once, and the model keeps only their
     // records (a canopy's are 20 MB a copy: loading them twice over was the run's peak).
     let binary_hi = binary && method == Some(Method::Hi);
-    let mut loaded = if binary_hi {
+    let mut loaded = if let Some(m) = model {
+        m
+    } else if binary_hi {
         let lean = files::load_scene_records(&a.scene)?;
         let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();
         if crate::tables::missing_of(&lean.scene, &closed).is_empty() {
@@ -99,6 +172,7 @@ pub fn run(a: Args) -> Result<()> {
         files::load_scene(&a.scene)?
     };
     super::warn_all(&loaded.warnings, loaded.warnings_total, a.quiet);
+    let loader_warnings = loaded.warnings.clone();
     if let (Some(p), None, Some(Method::Hi) | None) = (policy, &decision, method)
         && !loaded.scene.originals.is_empty()
     {
@@ -148,7 +222,7 @@ pub fn run(a: Args) -> Result<()> {
         ..a
     };
     warn_unused(&a);
-    let progress = Progress::new(a.quiet);
+    let progress = progress.unwrap_or_else(|| Progress::new(a.quiet));
     let closed: Vec<usize> = decision.iter().flat_map(|d| d.closed()).collect();
     let tables_made =
         super::solve_tables::complete(&a, &mut loaded.scene, &closed, threads, &progress)?;
@@ -195,11 +269,12 @@ pub fn run(a: Args) -> Result<()> {
         loaded.scene.drop_vertices();
     }
     // Shared with the results' row labels, which read it as the rows go by.
-    let shared = std::sync::Arc::new(loaded.scene);
+    let faces = loaded.faces.clone();
+    let shared = Arc::new(loaded.scene);
     let scene = &*shared;
     let bands = scene.bands as usize;
     // Material and group of every row; back-side columns only when a polygon is two-sided.
-    let labels = output::RowLabels::shared(std::sync::Arc::clone(&shared));
+    let labels = output::RowLabels::shared(Arc::clone(&shared));
     let two_sided = labels.uses_material(|m| scene.materials[m].data.two_sided);
 
     // Outputs, checked before the (possibly long) solve: writable, none of them a file the
@@ -300,7 +375,7 @@ pub fn run(a: Args) -> Result<()> {
                 output::TableLayout {
                     labels: output::columns::band_labels(bands, &scene.band_names),
                     two_sided,
-                    faces: loaded.faces.clone(),
+                    faces: faces.clone(),
                     rows: Some(labels),
                 },
             )
@@ -363,6 +438,10 @@ pub fn run(a: Args) -> Result<()> {
         worst_polygons: Vec::new(),
         ..SolveReport::default()
     };
+    let mut tee = Tee {
+        outputs: &mut outputs,
+        extra,
+    };
     match a.method {
         Method::Hr | Method::Hi => {
             let settings = Settings {
@@ -383,22 +462,10 @@ pub fn run(a: Args) -> Result<()> {
                     .map_or(hirad_core::hr::Inline::NONE, |d| d.inline());
                 match &image {
                     Some(view) => solve::solve_hi_image(
-                        view,
-                        &settings,
-                        inline,
-                        threads,
-                        a.memory,
-                        &progress,
-                        &mut outputs,
+                        view, &settings, inline, threads, a.memory, &progress, &mut tee,
                     ),
                     None => solve::solve_hi(
-                        scene,
-                        &settings,
-                        inline,
-                        threads,
-                        a.memory,
-                        &progress,
-                        &mut outputs,
+                        scene, &settings, inline, threads, a.memory, &progress, &mut tee,
                     ),
                 }
             } else {
@@ -409,7 +476,7 @@ pub fn run(a: Args) -> Result<()> {
                     a.memory,
                     a.ray_caster(),
                     &progress,
-                    &mut outputs,
+                    &mut tee,
                 )
             }
             .with_context(|| format!("{}", a.scene.display()))?;
@@ -469,9 +536,7 @@ pub fn run(a: Args) -> Result<()> {
                 .num_threads(threads)
                 .build()?;
             let r = pool
-                .install(|| {
-                    exact::solve_exact_obvhs_with(scene, &settings, &mut outputs, &progress)
-                })
+                .install(|| exact::solve_exact_obvhs_with(scene, &settings, &mut tee, &progress))
                 .map_err(|e| {
                     let error = anyhow!("{}: {e}", a.scene.display());
                     match e {
@@ -577,10 +642,13 @@ pub fn run(a: Args) -> Result<()> {
             eprintln!("wrote {}", wrote.join(", "));
         }
     }
-    match failure {
-        Some(why) => Err(not_right(anyhow!(why))),
-        None => Ok(()),
-    }
+    Ok(Solved {
+        report,
+        scene: shared,
+        faces,
+        warnings: loader_warnings.into_iter().chain(warnings).collect(),
+        failure,
+    })
 }
 
 /// Patches a `--method hi` image keeps for smooth shading at once (about 2 MB; corners are

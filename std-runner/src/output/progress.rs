@@ -56,10 +56,16 @@ struct State {
     out: Box<dyn Write + Send>,
 }
 
+/// What an embedding caller is told of every update (see [`Progress::observed`]): the phase
+/// as shown, steps done and the phase's total when known.
+pub type Observer = Box<dyn Fn(&str, u64, Option<u64>) + Send + Sync>;
+
 /// The progress of a run: a phase with a known total (`done/total` and a bar) or an open
 /// count (iterations).
 pub struct Progress {
     enabled: bool,
+    /// Told of every update, drawn or not (an embedding's callback).
+    observer: Option<Observer>,
     /// Every update drawn, from the start (`HIRAD_PROGRESS=every`).
     every: bool,
     /// Plain lines instead of a bar (no terminal).
@@ -107,6 +113,7 @@ impl Progress {
         let start = Instant::now();
         Progress {
             enabled,
+            observer: None,
             every: false,
             lines: false,
             start,
@@ -122,6 +129,16 @@ impl Progress {
                 out,
             }),
         }
+    }
+
+    /// A reporter that draws nothing and tells `observer` of every update instead (a
+    /// library caller's callback: the Python package's progress and its Ctrl-C check). The
+    /// observer runs on whichever thread reports, without the reporter's lock held; it may
+    /// unwind to stop the run (the caller catches it).
+    pub fn observed(observer: Observer) -> Self {
+        let mut p = Self::with_output(false, Box::new(std::io::sink()));
+        p.observer = Some(observer);
+        p
     }
 
     /// True when something may be shown.
@@ -208,6 +225,15 @@ impl Progress {
     /// Applies `change` (which says whether the update must be drawn: a phase starting or
     /// completing) and redraws if it is time to.
     fn update(&self, now: Instant, change: impl FnOnce(&mut State) -> bool) {
+        if let Some(observer) = &self.observer {
+            let (phase, done, total) = {
+                let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+                change(&mut s);
+                (s.phase.clone(), s.done, s.total)
+            };
+            observer(&phase, done, total);
+            return;
+        }
         if !self.enabled {
             return;
         }
