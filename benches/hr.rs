@@ -105,8 +105,8 @@ fn cornell_triangles_with_final_gather(bencher: Bencher, epsilon: f32) {
 fn phase_bench(
     bencher: Bencher,
     epsilon: f32,
-    prepare: impl Fn(&mut bench::Snapshot, &mut [u8], &ObvhsVisibility, &mut RayonExecutor),
-    phase: impl Fn(&mut bench::Snapshot, &mut [u8], &ObvhsVisibility, &mut RayonExecutor),
+    prepare: impl Fn(&mut bench::Snapshot, &mut [u8], &ObvhsVisibility, &mut RayonExecutor<'static>),
+    phase: impl Fn(&mut bench::Snapshot, &mut [u8], &ObvhsVisibility, &mut RayonExecutor<'static>),
 ) {
     let scene = cornell();
     let settings = Settings {
