@@ -2,8 +2,8 @@
 //! as `hirad solve --results` writes it, the expanded scene's polygons in world space (for
 //! a caller's ray caster), and floats written the way hirad's tables write them.
 
-use crate::scene::HiradScene;
-use crate::status::{Failure, HiradStatus, aligned, guarded};
+use crate::scene::{HiradScene, on_scene};
+use crate::status::{Failure, HiradStatus, aligned};
 use hirad::output::{RowLabels, TableLayout, columns::band_labels};
 use std::ffi::{CString, c_char};
 
@@ -24,35 +24,6 @@ fn keep(s: &mut HiradScene, text: &str) -> *const c_char {
     s.strings.last().map_or(std::ptr::null(), |c| c.as_ptr())
 }
 
-/// Runs `f` on the live handle `scene`, keeping its failure's message there.
-///
-/// # Safety
-/// `scene` null or a live handle.
-unsafe fn with_scene(
-    scene: *mut HiradScene,
-    f: impl FnOnce(&mut HiradScene) -> Result<(), Failure>,
-) -> HiradStatus {
-    guarded(|| {
-        if !aligned(scene) {
-            return HiradStatus::Misaligned;
-        }
-        // SAFETY: null or a live handle, by the caller's promise.
-        let Some(s) = (unsafe { scene.as_mut() }) else {
-            return HiradStatus::NullArgument;
-        };
-        match f(s) {
-            Ok(()) => {
-                s.say("");
-                HiradStatus::Ok
-            }
-            Err(e) => {
-                s.say(&e.message);
-                e.status
-            }
-        }
-    })
-}
-
 /// The name of material `index` at `*name` (NUL-terminated, valid until the handle is
 /// freed).
 ///
@@ -66,7 +37,7 @@ pub unsafe extern "C" fn hirad_scene_material_name(
 ) -> HiradStatus {
     // SAFETY: the caller's promise, passed on.
     unsafe {
-        with_scene(scene, |s| {
+        on_scene(scene, |s| {
             if name.is_null() {
                 return Err(Failure::new(HiradStatus::NullArgument, "name is null"));
             }
@@ -104,7 +75,7 @@ pub unsafe extern "C" fn hirad_scene_results_header(
 ) -> HiradStatus {
     // SAFETY: the caller's promise, passed on.
     unsafe {
-        with_scene(scene, |s| {
+        on_scene(scene, |s| {
             if header.is_null() || two_sided.is_null() {
                 return Err(Failure::new(
                     HiradStatus::NullArgument,
@@ -149,7 +120,7 @@ pub unsafe extern "C" fn hirad_scene_world_polygons(
 ) -> HiradStatus {
     // SAFETY: the caller's promise, passed on.
     unsafe {
-        with_scene(scene, |s| {
+        on_scene(scene, |s| {
             if out.is_null() {
                 return Err(Failure::new(HiradStatus::NullArgument, "out is null"));
             }

@@ -235,6 +235,36 @@ unsafe fn opened(source: Source, out: *mut *mut HiradScene) -> HiradStatus {
     status
 }
 
+/// Runs `f` on the live handle `scene` (refusing null and misaligned pointers, catching a
+/// panic), keeping its failure's message there ("" on success).
+///
+/// # Safety
+/// `scene` null or a live handle.
+pub(crate) unsafe fn on_scene(
+    scene: *mut HiradScene,
+    f: impl FnOnce(&mut HiradScene) -> Result<(), crate::status::Failure>,
+) -> HiradStatus {
+    guarded(|| {
+        if !crate::status::aligned(scene) {
+            return HiradStatus::Misaligned;
+        }
+        // SAFETY: null or a live handle, by the caller's promise.
+        let Some(s) = (unsafe { scene.as_mut() }) else {
+            return HiradStatus::NullArgument;
+        };
+        match f(s) {
+            Ok(()) => {
+                s.say("");
+                HiradStatus::Ok
+            }
+            Err(e) => {
+                s.say(&e.message);
+                e.status
+            }
+        }
+    })
+}
+
 /// Frees a handle made by `hirad_scene_open_memory` or `hirad_scene_open_reader` (null:
 /// nothing).
 ///

@@ -4,9 +4,9 @@
 use crate::callbacks::{CasterCb, HiradCallbacks, ProgressCb, SinkCb};
 use crate::executor::Stoppable;
 use crate::prepare::{self, Prepared};
-use crate::scene::HiradScene;
+use crate::scene::{HiradScene, on_scene};
 use crate::settings::{Checked, HIRAD_METHOD_HI, HIRAD_METHOD_HR, HiradSettings};
-use crate::status::{Failure, HiradStatus, aligned, guarded};
+use crate::status::{Failure, HiradStatus, aligned};
 use hirad::output::RowLabels;
 use hirad::solve::RayonExecutor;
 use hirad_core::hr::{self, SolveError, Stats};
@@ -191,36 +191,6 @@ fn caster_of(c: &HiradCallbacks, polygons: u64) -> Result<Option<CasterCb>, Fail
             "give the ray caster's transmittance and first_hit both, or neither",
         )),
     }
-}
-
-/// Runs `f` on the live handle `scene`, keeping its failure's message there ("" on
-/// success).
-///
-/// # Safety
-/// `scene` null or a live handle.
-unsafe fn on_scene(
-    scene: *mut HiradScene,
-    f: impl FnOnce(&mut HiradScene) -> Result<(), Failure>,
-) -> HiradStatus {
-    guarded(|| {
-        if !aligned(scene) {
-            return HiradStatus::Misaligned;
-        }
-        // SAFETY: null or a live handle, by the caller's promise.
-        let Some(s) = (unsafe { scene.as_mut() }) else {
-            return HiradStatus::NullArgument;
-        };
-        match f(s) {
-            Ok(()) => {
-                s.say("");
-                HiradStatus::Ok
-            }
-            Err(e) => {
-                s.say(&e.message);
-                e.status
-            }
-        }
-    })
 }
 
 /// Plans a solve of `scene` with `settings`: the method they come to and the workspace it
