@@ -51,21 +51,21 @@ class Solution:
             a = np.frombuffer(data, dtype=dtype).copy()
             return a.reshape(shape) if shape is not None else a
 
-        self.ids = arr("ids", "<u8").astype(np.uint64)
-        self.area = arr("area", "<f4").astype(np.float32)
-        self.radiosity = arr("radiosity", "<f4", (n, b)).astype(np.float32)
-        self.irradiance = arr("irradiance", "<f4", (n, b)).astype(np.float32)
+        self.ids = arr("ids", "<u8").astype(np.uint64, copy=False)
+        self.area = arr("area", "<f4").astype(np.float32, copy=False)
+        self.radiosity = arr("radiosity", "<f4", (n, b)).astype(np.float32, copy=False)
+        self.irradiance = arr("irradiance", "<f4", (n, b)).astype(np.float32, copy=False)
         self.radiosity_back = arr("radiosity_back", "<f4", (n, b))
         self.irradiance_back = arr("irradiance_back", "<f4", (n, b))
         if self.radiosity_back is not None:
-            self.radiosity_back = self.radiosity_back.astype(np.float32)
-            self.irradiance_back = self.irradiance_back.astype(np.float32)
+            self.radiosity_back = self.radiosity_back.astype(np.float32, copy=False)
+            self.irradiance_back = self.irradiance_back.astype(np.float32, copy=False)
         self.band_names = list(raw["band_names"])
         self.stats = json.loads(raw["stats_json"])
         self.materials = list(raw["material_names"])
-        self.material_index = arr("material_of_row", "<u4").astype(np.int32)
+        self.material_index = arr("material_of_row", "<u4").astype(np.int32, copy=False)
         self.groups = list(raw["group_names"])
-        self.group_index = arr("group_of_row", "<u4").astype(np.int32)
+        self.group_index = arr("group_of_row", "<u4").astype(np.int32, copy=False)
         self.group_area = arr("group_area", "<f8")
         self.group_absorbed = arr("group_absorbed", "<f8", (len(self.groups), b))
         if from_model:
@@ -75,9 +75,9 @@ class Solution:
         else:
             self.group_ids = np.arange(len(self.groups), dtype=np.int64)
         t = arr("triangles", "<u8")
-        self.triangles = None if t is None else t.astype(np.int64)
+        self.triangles = None if t is None else t.astype(np.int64, copy=False)
         f = arr("faces", "<u8")
-        self.faces = None if f is None else f.astype(np.int64)
+        self.faces = None if f is None else f.astype(np.int64, copy=False)
         self.warnings = list(raw["warnings"])
         self.failure = raw["failure"]
 
