@@ -88,16 +88,34 @@ pub fn scoped<R>(threads: usize, f: impl FnOnce(&mut RayonExecutor<'_>) -> R) ->
             Ok(())
         })
         .build()?;
-    let r = f(&mut RayonExecutor::with(
-        Some(Pool::Borrowed(&pool)),
+    // Joined when `f` returns, and when it unwinds (a panic the C ABI catches).
+    let joined = Joined {
+        pool: Some(pool),
+        handles: handles.into_inner().unwrap_or_else(|e| e.into_inner()),
+    };
+    let pool = joined
+        .pool
+        .as_ref()
+        .expect("the pool lives until `joined` is dropped");
+    Ok(f(&mut RayonExecutor::with(
+        Some(Pool::Borrowed(pool)),
         threads,
-    ));
-    // Dropping the pool tells its threads to end; each is joined.
-    drop(pool);
-    for h in handles.into_inner().unwrap_or_else(|e| e.into_inner()) {
-        let _ = h.join();
+    )))
+}
+
+/// A call's pool and its threads: dropping it tells them to end and joins each.
+struct Joined {
+    pool: Option<rayon::ThreadPool>,
+    handles: Vec<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for Joined {
+    fn drop(&mut self) {
+        drop(self.pool.take());
+        for h in self.handles.drain(..) {
+            let _ = h.join();
+        }
     }
-    Ok(r)
 }
 
 thread_local! {
