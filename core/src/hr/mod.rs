@@ -46,6 +46,7 @@ mod level;
 mod load;
 mod load_instances;
 mod local_field;
+mod noted_radiance;
 mod open;
 mod oriented;
 mod original_geometry;
