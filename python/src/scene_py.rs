@@ -151,11 +151,7 @@ impl SceneBuilder {
         irradiance: Vec<f32>,
     ) -> PyResult<()> {
         guarded(py, || {
-            let d = Vec3::new(
-                direction[0] as f32,
-                direction[1] as f32,
-                direction[2] as f32,
-            );
+            let d = vec3(direction);
             self.inner.add_sun(d, &irradiance).map_err(value_error)
         })
     }
@@ -169,11 +165,7 @@ impl SceneBuilder {
         irradiance: Vec<f32>,
     ) -> PyResult<()> {
         guarded(py, || {
-            let d = Vec3::new(
-                direction[0] as f32,
-                direction[1] as f32,
-                direction[2] as f32,
-            );
+            let d = vec3(direction);
             self.inner.add_sky(d, &irradiance).map_err(value_error)
         })
     }
@@ -255,4 +247,9 @@ impl SceneBuilder {
     fn lights(&self) -> (usize, usize) {
         (self.inner.scene.suns.len(), self.inner.scene.sky.len())
     }
+}
+
+/// A direction given as three doubles, as the scene model holds it (f32).
+fn vec3(d: [f64; 3]) -> Vec3 {
+    Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32)
 }
